@@ -1,0 +1,1 @@
+//! FFI backends (MUMPS, PETSc) behind features; see issue 7.

@@ -1,0 +1,95 @@
+//! The linear solver interface shared by every backend, and the run-time registry.
+
+use crate::csr::{CsrMatrix, CsrPattern};
+use std::sync::Arc;
+
+/// Why a factorization or a solve failed. Indices are unknown numbers in the original
+/// (unpermuted) numbering.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// A Cholesky (LLᵀ) pivot was not positive. `pivot` is the value of the failed pivot
+    /// (the corresponding LDLᵀ pivot, same units as the matrix entries), NaN if unknown.
+    #[error("the matrix is not positive definite: pivot {pivot:e} at unknown {index}")]
+    NotPositiveDefinite {
+        /// Unknown (original numbering) whose pivot failed.
+        index: usize,
+        /// Value of the failed pivot.
+        pivot: f64,
+    },
+    /// An exactly zero pivot (LDLᵀ) or a non-finite solution (LU).
+    #[error("the matrix is singular: zero pivot at unknown {index}")]
+    Singular {
+        /// Unknown (original numbering) at the zero pivot.
+        index: usize,
+    },
+    /// An iterative solver did not reach its tolerance.
+    #[error("no convergence after {iterations} iterations (relative residual {residual:e})")]
+    NoConvergence {
+        /// Iterations performed.
+        iterations: usize,
+        /// Final relative residual ‖b − A x‖ / ‖b‖.
+        residual: f64,
+    },
+    /// Anything else (wrong sizes, solve before factorize, index overflow, ...).
+    #[error("{0}")]
+    Other(String),
+}
+
+/// Counters and timers of a backend, cumulative since its creation (except the fields
+/// documented as "last").
+#[derive(Debug, Clone, Default)]
+pub struct SolverStats {
+    /// Number of symbolic analyses actually performed (cache misses).
+    pub symbolic_factorizations: usize,
+    /// Number of numeric factorizations (or preconditioner setups for iterative solvers).
+    pub numeric_factorizations: usize,
+    /// Number of solves.
+    pub solves: usize,
+    /// Total iterations of an iterative solver (0 for direct solvers).
+    pub iterations: usize,
+    /// Wall time spent in symbolic analyses, seconds.
+    pub symbolic_seconds: f64,
+    /// Wall time spent in numeric factorizations, seconds.
+    pub numeric_seconds: f64,
+    /// Wall time spent in solves, seconds.
+    pub solve_seconds: f64,
+    /// Stored entries of the factor (L for Cholesky, L + U for LU) of the last analysis.
+    pub factor_nnz: usize,
+    /// smallest pivot ratio d_i / a_ii seen at the last factorization (a measure of near-singularity: ~1e-16 for a mechanism)
+    pub min_pivot_ratio: f64,
+    /// Unknown (original numbering) where `min_pivot_ratio` was reached.
+    pub min_pivot_index: usize,
+}
+
+/// A sparse linear solver: symbolic analysis once per pattern, numeric factorization
+/// whenever the values change, any number of solves.
+pub trait LinearBackend: Send {
+    /// Name as accepted by [`backend_from_name`].
+    fn name(&self) -> &'static str;
+    /// Symbolic phase (ordering, elimination structure). Cached by pattern id: a second call with the same pattern does nothing.
+    fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError>;
+    /// Numeric phase; calls analyze if the pattern changed. For direct solvers, fills min_pivot_ratio.
+    fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError>;
+    /// Solve A x = rhs in place, with the last factorized matrix.
+    fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError>;
+    /// Counters and timers.
+    fn stats(&self) -> &SolverStats;
+}
+
+/// Names accepted by [`backend_from_name`].
+pub const BACKENDS: &[&str] = &["faer-cholesky", "faer-ldlt", "faer-lu", "pcg"];
+
+/// Builds a backend from its name (one of [`BACKENDS`]) with default settings.
+/// The error message lists the valid names.
+pub fn backend_from_name(name: &str) -> Result<Box<dyn LinearBackend>, String> {
+    match name {
+        "faer-cholesky" => Ok(Box::new(crate::faer_backend::FaerCholesky::new())),
+        "faer-ldlt" => Ok(Box::new(crate::faer_backend::FaerLdlt::new())),
+        "faer-lu" => Ok(Box::new(crate::faer_backend::FaerLu::new())),
+        "pcg" => Ok(Box::new(crate::pcg::Pcg::new())),
+        _ => Err(format!(
+            "unknown linear backend '{name}'; valid names: {}",
+            BACKENDS.join(", ")
+        )),
+    }
+}

@@ -1,0 +1,558 @@
+//! Direct solvers on faer's sparse factorizations: [`FaerCholesky`] (LLᵀ),
+//! [`FaerLdlt`] (LDLᵀ without pivoting) and [`FaerLu`] (LU with partial pivoting).
+//!
+//! All of them keep the symbolic analysis (AMD ordering, elimination tree, supernodes),
+//! the factor value buffer and the scratch memory for as long as the pattern id does not
+//! change, and they factorize and solve with `Par::Seq`: faer's sparse factorizations
+//! gain nothing from a second thread on 2D problems, and sequential runs give the same
+//! bits for any rayon pool size.
+//!
+//! The symmetric CSR matrix is passed to faer as a compressed-sparse-column view of the
+//! same arrays (a structurally symmetric CSR is its own CSC); with `Side::Lower` faer
+//! reads only the entries with row ≥ column.
+
+use crate::backend::{LinearBackend, SolveError, SolverStats};
+use crate::csr::{CsrMatrix, CsrPattern};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
+use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
+    SymbolicCholeskyRaw, SymmetricOrdering,
+};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
+use faer::sparse::linalg::{LuError, SupernodalThreshold};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Row pointers converted to faer's index type (u32): the pattern must have fewer than
+/// 2³² stored entries.
+fn col_ptr_u32(p: &CsrPattern) -> Result<Vec<u32>, SolveError> {
+    if p.nnz() >= u32::MAX as usize {
+        return Err(SolveError::Other(format!(
+            "the matrix has {} stored entries; the faer backends use 32-bit indices",
+            p.nnz()
+        )));
+    }
+    Ok(p.row_ptr().iter().map(|&x| x as u32).collect())
+}
+
+fn faer_err(e: impl std::fmt::Debug) -> SolveError {
+    SolveError::Other(format!("faer: {e:?}"))
+}
+
+fn check_rhs(n: usize, rhs: &[f64]) -> Result<(), SolveError> {
+    if rhs.len() != n {
+        return Err(SolveError::Other(format!(
+            "right-hand side has length {}, expected {n}",
+            rhs.len()
+        )));
+    }
+    Ok(())
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    Llt,
+    Ldlt,
+}
+
+/// Symbolic analysis and buffers kept for one pattern.
+struct CholAnalysis {
+    pattern: Arc<CsrPattern>,
+    col_ptr: Vec<u32>,
+    symbolic: SymbolicCholesky<u32>,
+    l_values: Vec<f64>,
+    mem: MemBuffer,
+    diag_pos: Vec<usize>,
+    factored: bool,
+}
+
+impl CholAnalysis {
+    /// Permuted column of a failed pivot from faer's error index (0-based permuted column
+    /// in both the simplicial and the supernodal variants, checked by the tests); clamped
+    /// to a valid index.
+    fn failed_column(&self, index: usize) -> usize {
+        index.min(self.pattern.n().saturating_sub(1))
+    }
+
+    /// Original index of permuted index `p`.
+    fn original(&self, p: usize) -> usize {
+        match self.symbolic.perm() {
+            Some(perm) => perm.arrays().0[p] as usize,
+            None => p,
+        }
+    }
+
+    /// Diagonal of the stored factor, in permuted order: L_pp for LLᵀ, D_pp for LDLᵀ.
+    fn factor_diagonal(&self) -> Vec<f64> {
+        let n = self.pattern.n();
+        let mut d = vec![0.0; n];
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let cp = s.col_ptr();
+                let ri = s.row_idx();
+                for (j, dj) in d.iter_mut().enumerate() {
+                    let range = cp[j] as usize..cp[j + 1] as usize;
+                    if let Some(k) = ri[range.clone()].iter().position(|&r| r as usize == j) {
+                        *dj = self.l_values[range.start + k];
+                    }
+                }
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let r = SupernodalLltRef::new(s, &self.l_values);
+                for sn in 0..s.n_supernodes() {
+                    let node = r.supernode(sn);
+                    let start = node.start();
+                    let val = node.val();
+                    for k in 0..val.ncols() {
+                        d[start + k] = val[(k, k)];
+                    }
+                }
+            }
+        }
+        d
+    }
+}
+
+/// Shared implementation of the LLᵀ and LDLᵀ backends.
+struct CholeskyCore {
+    kind: Kind,
+    supernodal_threshold: f64,
+    analysis: Option<CholAnalysis>,
+    stats: SolverStats,
+}
+
+impl CholeskyCore {
+    fn new(kind: Kind) -> Self {
+        Self {
+            kind,
+            supernodal_threshold: 1.0,
+            analysis: None,
+            stats: SolverStats {
+                min_pivot_ratio: f64::NAN,
+                ..Default::default()
+            },
+        }
+    }
+
+    fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError> {
+        if self
+            .analysis
+            .as_ref()
+            .is_some_and(|a| a.pattern.id() == pattern.id())
+        {
+            return Ok(());
+        }
+        self.analysis = None;
+        let t = Instant::now();
+        let n = pattern.n();
+        let col_ptr = col_ptr_u32(pattern)?;
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, pattern.col_idx());
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold(self.supernodal_threshold),
+            ..Default::default()
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Amd, params)
+                .map_err(faer_err)?;
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]);
+        let mem = MemBuffer::try_new(req)
+            .map_err(|_| SolveError::Other("out of memory for faer scratch".into()))?;
+        let l_values = vec![0.0; symbolic.len_val()];
+        self.stats.factor_nnz = l_values.len();
+        self.analysis = Some(CholAnalysis {
+            pattern: pattern.clone(),
+            col_ptr,
+            symbolic,
+            l_values,
+            mem,
+            diag_pos: pattern.diagonal_positions(),
+            factored: false,
+        });
+        self.stats.symbolic_factorizations += 1;
+        self.stats.symbolic_seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
+        self.analyze(&a.pattern)?;
+        let t = Instant::now();
+        let kind = self.kind;
+        let an = self.analysis.as_mut().expect("analyzed");
+        an.factored = false;
+        let n = an.pattern.n();
+        if a.values.len() != an.pattern.nnz() {
+            return Err(SolveError::Other(
+                "matrix values do not match the pattern".into(),
+            ));
+        }
+        let sym =
+            SymbolicSparseColMatRef::new_checked(n, n, &an.col_ptr, None, an.pattern.col_idx());
+        let mat = SparseColMatRef::new(sym, &a.values);
+        let result = match kind {
+            Kind::Llt => an
+                .symbolic
+                .factorize_numeric_llt(
+                    &mut an.l_values,
+                    mat,
+                    Side::Lower,
+                    LltRegularization::default(),
+                    Par::Seq,
+                    MemStack::new(&mut an.mem),
+                    Default::default(),
+                )
+                .map(|_| ())
+                .map_err(|LltError::NonPositivePivot { index }| Ok(index)),
+            Kind::Ldlt => an
+                .symbolic
+                .factorize_numeric_ldlt(
+                    &mut an.l_values,
+                    mat,
+                    Side::Lower,
+                    LdltRegularization::default(),
+                    Par::Seq,
+                    MemStack::new(&mut an.mem),
+                    Default::default(),
+                )
+                .map(|_| ())
+                .map_err(|LdltError::ZeroPivot { index }| Err(SolveError::Singular { index })),
+        };
+        self.stats.numeric_factorizations += 1;
+        // faer reports the failed pivot 1-based from its simplicial kernels (`k + 1`) and
+        // 0-based from its supernodal (dense) ones: bring both to 0-based permuted indices.
+        let simplicial = matches!(an.symbolic.raw(), SymbolicCholeskyRaw::Simplicial(_));
+        let zero_based =
+            |i: usize| if simplicial { i.saturating_sub(1) } else { i }.min(n.saturating_sub(1));
+        let result = match result {
+            Err(Ok(p)) => Err(Ok(zero_based(p))),
+            Err(Err(SolveError::Singular { index })) => Err(Err(SolveError::Singular {
+                index: zero_based(index),
+            })),
+            other => other,
+        };
+        let outcome = match result {
+            Ok(()) => {
+                let d = an.factor_diagonal();
+                let mut best = (f64::INFINITY, 0usize);
+                for (p, &dp) in d.iter().enumerate() {
+                    let di = if kind == Kind::Llt { dp * dp } else { dp };
+                    let i = an.original(p);
+                    let aii = a.values[an.diag_pos[i]];
+                    let ratio = if aii != 0.0 { di / aii.abs() } else { di };
+                    // NaN ratios (NaN input) are reported first
+                    if ratio < best.0 || ratio.is_nan() && !best.0.is_nan() {
+                        best = (ratio, i);
+                    }
+                }
+                if n == 0 {
+                    best = (f64::NAN, 0);
+                }
+                self.stats.min_pivot_ratio = best.0;
+                self.stats.min_pivot_index = best.1;
+                an.factored = true;
+                Ok(())
+            }
+            Err(Err(SolveError::Singular { index })) => {
+                let i = an.original(an.failed_column(index));
+                self.stats.min_pivot_ratio = 0.0;
+                self.stats.min_pivot_index = i;
+                Err(SolveError::Singular { index: i })
+            }
+            Err(Err(e)) => Err(e),
+            Err(Ok(index)) => {
+                let p = an.failed_column(index);
+                // LLᵀ failed at permuted column p: the LDLᵀ pivot there is the failed value.
+                let i = an.original(p);
+                let ldlt = an
+                    .symbolic
+                    .factorize_numeric_ldlt(
+                        &mut an.l_values,
+                        mat,
+                        Side::Lower,
+                        LdltRegularization::default(),
+                        Par::Seq,
+                        MemStack::new(&mut an.mem),
+                        Default::default(),
+                    )
+                    .map(|_| ())
+                    .map_err(|LdltError::ZeroPivot { index }| index);
+                let pivot = match ldlt {
+                    Ok(()) => an.factor_diagonal()[p],
+                    Err(index) if an.failed_column(index) == p => 0.0,
+                    Err(_) => f64::NAN,
+                };
+                self.stats.min_pivot_ratio = f64::NAN;
+                self.stats.min_pivot_index = i;
+                Err(SolveError::NotPositiveDefinite { index: i, pivot })
+            }
+        };
+        self.stats.numeric_seconds += t.elapsed().as_secs_f64();
+        outcome
+    }
+
+    fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
+        let an = match &mut self.analysis {
+            Some(an) if an.factored => an,
+            _ => {
+                return Err(SolveError::Other(
+                    "solve called without a successful factorization".into(),
+                ))
+            }
+        };
+        let n = an.pattern.n();
+        check_rhs(n, rhs)?;
+        let t = Instant::now();
+        let x = MatMut::from_column_major_slice_mut(rhs, n, 1);
+        let stack = MemStack::new(&mut an.mem);
+        match self.kind {
+            Kind::Llt => LltRef::new(&an.symbolic, &an.l_values).solve_in_place_with_conj(
+                Conj::No,
+                x,
+                Par::Seq,
+                stack,
+            ),
+            Kind::Ldlt => LdltRef::new(&an.symbolic, &an.l_values).solve_in_place_with_conj(
+                Conj::No,
+                x,
+                Par::Seq,
+                stack,
+            ),
+        }
+        self.stats.solves += 1;
+        self.stats.solve_seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+}
+
+/// Sparse Cholesky LLᵀ (faer, AMD ordering, supernodal or simplicial chosen by faer).
+/// Fails with [`SolveError::NotPositiveDefinite`] on a non-positive pivot; after a
+/// success, `stats().min_pivot_ratio` = minᵢ L_ii² / a_ii.
+pub struct FaerCholesky(CholeskyCore);
+
+/// Sparse LDLᵀ without pivoting (faer). Negative pivots are accepted (indefinite
+/// matrices without a zero leading minor still factor); an exactly zero pivot gives
+/// [`SolveError::Singular`]. Semi-definiteness shows through
+/// `stats().min_pivot_ratio` = minᵢ D_ii / |a_ii| (≈ 1e-16 or negative for a mechanism):
+/// the caller decides on the threshold.
+pub struct FaerLdlt(CholeskyCore);
+
+impl Default for FaerCholesky {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl FaerCholesky {
+    /// A backend with no analysis yet.
+    pub fn new() -> Self {
+        Self(CholeskyCore::new(Kind::Llt))
+    }
+
+    /// Sets faer's supernodal threshold (takes effect at the next analysis): 1 = automatic
+    /// (default), 0 = always supernodal, `f64::INFINITY` = always simplicial.
+    pub fn with_supernodal_threshold(mut self, threshold: f64) -> Self {
+        self.0.supernodal_threshold = threshold;
+        self.0.analysis = None;
+        self
+    }
+}
+
+impl Default for FaerLdlt {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl FaerLdlt {
+    /// A backend with no analysis yet.
+    pub fn new() -> Self {
+        Self(CholeskyCore::new(Kind::Ldlt))
+    }
+
+    /// Sets faer's supernodal threshold (takes effect at the next analysis): 1 = automatic
+    /// (default), 0 = always supernodal, `f64::INFINITY` = always simplicial.
+    pub fn with_supernodal_threshold(mut self, threshold: f64) -> Self {
+        self.0.supernodal_threshold = threshold;
+        self.0.analysis = None;
+        self
+    }
+}
+
+macro_rules! chol_backend {
+    ($t:ty, $name:literal) => {
+        impl LinearBackend for $t {
+            fn name(&self) -> &'static str {
+                $name
+            }
+            fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError> {
+                self.0.analyze(pattern)
+            }
+            fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
+                self.0.factorize(a)
+            }
+            fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
+                self.0.solve(rhs)
+            }
+            fn stats(&self) -> &SolverStats {
+                &self.0.stats
+            }
+        }
+    };
+}
+chol_backend!(FaerCholesky, "faer-cholesky");
+chol_backend!(FaerLdlt, "faer-ldlt");
+
+struct LuAnalysis {
+    pattern: Arc<CsrPattern>,
+    col_ptr: Vec<u32>,
+    symbolic: SymbolicLu<u32>,
+    numeric: NumericLu<u32, f64>,
+    mem: MemBuffer,
+    factored: bool,
+}
+
+/// Sparse LU with partial pivoting (faer, COLAMD column ordering); the symbolic analysis
+/// and the numeric storage are reused across factorizations of the same pattern.
+/// Works for unsymmetric values on the (structurally symmetric) CSR pattern: the CSR
+/// arrays read as CSC are Aᵀ, which is factorized, and solves use the transposed solve.
+/// `min_pivot_ratio` is not computed (NaN); a singular matrix shows as a
+/// [`SolveError::Singular`] at the first non-finite solution entry.
+pub struct FaerLu {
+    analysis: Option<LuAnalysis>,
+    stats: SolverStats,
+}
+
+impl Default for FaerLu {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl FaerLu {
+    /// A backend with no analysis yet.
+    pub fn new() -> Self {
+        Self {
+            analysis: None,
+            stats: SolverStats {
+                min_pivot_ratio: f64::NAN,
+                ..Default::default()
+            },
+        }
+    }
+}
+
+impl LinearBackend for FaerLu {
+    fn name(&self) -> &'static str {
+        "faer-lu"
+    }
+
+    fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError> {
+        if self
+            .analysis
+            .as_ref()
+            .is_some_and(|a| a.pattern.id() == pattern.id())
+        {
+            return Ok(());
+        }
+        self.analysis = None;
+        let t = Instant::now();
+        let n = pattern.n();
+        let col_ptr = col_ptr_u32(pattern)?;
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, pattern.col_idx());
+        let symbolic = factorize_symbolic_lu(sym, Default::default()).map_err(faer_err)?;
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.solve_transpose_in_place_scratch::<f64>(1, Par::Seq),
+        ]);
+        let mem = MemBuffer::try_new(req)
+            .map_err(|_| SolveError::Other("out of memory for faer scratch".into()))?;
+        self.analysis = Some(LuAnalysis {
+            pattern: pattern.clone(),
+            col_ptr,
+            symbolic,
+            numeric: NumericLu::new(),
+            mem,
+            factored: false,
+        });
+        self.stats.symbolic_factorizations += 1;
+        self.stats.symbolic_seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
+        self.analyze(&a.pattern)?;
+        let t = Instant::now();
+        let an = self.analysis.as_mut().expect("analyzed");
+        an.factored = false;
+        if a.values.len() != an.pattern.nnz() {
+            return Err(SolveError::Other(
+                "matrix values do not match the pattern".into(),
+            ));
+        }
+        let n = an.pattern.n();
+        let sym =
+            SymbolicSparseColMatRef::new_checked(n, n, &an.col_ptr, None, an.pattern.col_idx());
+        let mat = SparseColMatRef::new(sym, &a.values);
+        let r = an
+            .symbolic
+            .factorize_numeric_lu(
+                &mut an.numeric,
+                mat,
+                Par::Seq,
+                MemStack::new(&mut an.mem),
+                Default::default(),
+            )
+            .map(|_| ());
+        self.stats.numeric_factorizations += 1;
+        self.stats.numeric_seconds += t.elapsed().as_secs_f64();
+        match r {
+            Ok(()) => {
+                an.factored = true;
+                Ok(())
+            }
+            Err(LuError::SymbolicSingular { index }) => Err(SolveError::Singular { index }),
+            Err(LuError::Generic(e)) => Err(faer_err(e)),
+        }
+    }
+
+    fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
+        let an = match &mut self.analysis {
+            Some(an) if an.factored => an,
+            _ => {
+                return Err(SolveError::Other(
+                    "solve called without a successful factorization".into(),
+                ))
+            }
+        };
+        let n = an.pattern.n();
+        check_rhs(n, rhs)?;
+        let t = Instant::now();
+        {
+            let x = MatMut::from_column_major_slice_mut(rhs, n, 1);
+            LuRef::new_unchecked(&an.symbolic, &an.numeric).solve_transpose_in_place_with_conj(
+                Conj::No,
+                x,
+                Par::Seq,
+                MemStack::new(&mut an.mem),
+            );
+        }
+        self.stats.solves += 1;
+        self.stats.solve_seconds += t.elapsed().as_secs_f64();
+        if let Some(i) = rhs.iter().position(|v| !v.is_finite()) {
+            return Err(SolveError::Singular { index: i });
+        }
+        Ok(())
+    }
+
+    fn stats(&self) -> &SolverStats {
+        &self.stats
+    }
+}

@@ -1,0 +1,26 @@
+#![warn(missing_docs)]
+//! `dfem-kernels`: physics-free sparse linear algebra for dfem, on faer and rayon.
+//!
+//! * [`csr`]: the sparsity pattern ([`CsrPattern`], built once per topology) and matrices
+//!   holding values on it ([`CsrMatrix`]).
+//! * [`assembly`]: deterministic parallel assembly ([`AssemblyPlan`]).
+//! * [`backend`]: the [`LinearBackend`] trait and the registry [`backend_from_name`].
+//! * [`faer_backend`]: sparse Cholesky LLᵀ, LDLᵀ and LU on faer.
+//! * [`pcg`]: Jacobi-preconditioned conjugate gradients.
+//! * [`mm`]: Matrix Market input and output.
+//!
+//! Determinism: assembly, `mul_vec` and PCG reductions use fixed chunking; the direct
+//! factorizations run sequentially. Results are bit-identical for any thread count.
+
+pub mod assembly;
+pub mod backend;
+pub mod csr;
+pub mod faer_backend;
+pub mod mm;
+pub mod pcg;
+
+pub use assembly::{AssemblyPlan, Connectivity, CONSTRAINED};
+pub use backend::{backend_from_name, LinearBackend, SolveError, SolverStats, BACKENDS};
+pub use csr::{CsrMatrix, CsrPattern};
+pub use faer_backend::{FaerCholesky, FaerLdlt, FaerLu};
+pub use pcg::Pcg;

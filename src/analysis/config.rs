@@ -1,0 +1,212 @@
+//! The current configuration of the model (updated Lagrangian, METHOD.md §4) and the
+//! internal forces of a trial increment: co-rotational CST stresses, so that a rigid
+//! rotation of any size produces no strain, and contact forces returned to the strength
+//! envelope by the contact law.
+
+use crate::assembly::{contact_gradient, cst_b, System};
+use crate::geometry::polygon::{sub, Point};
+use crate::material::{ContactLaw, ContactState};
+use crate::mesh::{BlockDofs, Mesh};
+use dfem_kernels::CONSTRAINED;
+
+/// What is committed at the end of a converged increment.
+#[derive(Debug, Clone)]
+pub struct Committed {
+    /// Cauchy stress of every triangle (σxx, σyy, σxy) (Pa), in the current frame.
+    pub stress: Vec<[f64; 3]>,
+    /// Contact forces (normal, shear) (N) in the contact's current frame; normal > 0 in tension.
+    pub force: Vec<[f64; 2]>,
+    pub state: Vec<ContactState>,
+    /// Total unknowns since the start (m, rad): rigid blocks' centroid displacement and
+    /// rotation, deformable nodes' displacement.
+    pub u: Vec<f64>,
+}
+
+impl Committed {
+    pub fn zero(mesh: &Mesh) -> Self {
+        Committed {
+            stress: vec![[0.0; 3]; mesh.triangles.len()],
+            force: vec![[0.0; 2]; mesh.contacts.len()],
+            state: vec![ContactState::Stick; mesh.contacts.len()],
+            u: vec![0.0; mesh.n_dofs],
+        }
+    }
+}
+
+/// A trial increment evaluated: positions, stresses, contact forces and the internal force
+/// vector (N).
+#[derive(Debug, Clone)]
+pub struct Trial {
+    pub mesh: Mesh,
+    pub stress: Vec<[f64; 3]>,
+    pub force: Vec<[f64; 2]>,
+    pub state: Vec<ContactState>,
+    pub f_int: Vec<f64>,
+    /// The increment of unknowns evaluated (m, rad).
+    pub dq: Vec<f64>,
+}
+
+/// Move the configuration `cur` by the increment `dq` (unknowns) and `presc` (prescribed
+/// translation of each fixed block, m): exact rotation for rigid blocks. Returns the moved
+/// configuration and every node's displacement increment (m), computed directly rather
+/// than as a difference of positions, which would lose the small relative displacements
+/// of stiff contacts to round-off.
+pub fn moved(cur: &Mesh, dq: &[f64], presc: &[Point]) -> (Mesh, Vec<Point>) {
+    let mut m = cur.clone();
+    let mut du = vec![[0.0; 2]; cur.nodes.len()];
+    for (bi, b) in cur.blocks.iter().enumerate() {
+        match b.dofs {
+            BlockDofs::Fixed => {
+                let d = presc[bi];
+                for n in b.nodes.clone() {
+                    du[n as usize] = d;
+                }
+            }
+            BlockDofs::Deformable => {
+                for n in b.nodes.clone() {
+                    let d = cur.node_dofs[n as usize];
+                    du[n as usize] = [dq[d[0] as usize], dq[d[1] as usize]];
+                }
+            }
+            BlockDofs::Rigid { first, centroid } => {
+                let f = first as usize;
+                let s = dq[f + 2].sin();
+                // (R(Δθ) − I) r with c − 1 = −2 sin²(Δθ/2), accurate for small angles
+                let cm1 = -2.0 * (0.5 * dq[f + 2]).sin().powi(2);
+                for n in b.nodes.clone() {
+                    let r = sub(cur.nodes[n as usize], centroid);
+                    du[n as usize] = [
+                        dq[f] + cm1 * r[0] - s * r[1],
+                        dq[f + 1] + s * r[0] + cm1 * r[1],
+                    ];
+                }
+                let cn = [centroid[0] + dq[f], centroid[1] + dq[f + 1]];
+                m.blocks[bi].dofs = BlockDofs::Rigid {
+                    first,
+                    centroid: cn,
+                };
+                m.blocks[bi].centroid = cn;
+            }
+        }
+    }
+    for (p, d) in m.nodes.iter_mut().zip(&du) {
+        p[0] += d[0];
+        p[1] += d[1];
+    }
+    m.update_normals();
+    (m, du)
+}
+
+/// Evaluate the increment `dq` from the configuration `cur` and the committed state.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate(
+    system: &System,
+    cur: &Mesh,
+    committed: &Committed,
+    law: &dyn ContactLaw,
+    area: &[f64],
+    thickness: f64,
+    dq: &[f64],
+    presc: &[Point],
+) -> Trial {
+    use rayon::prelude::*;
+    let (mesh, du) = moved(cur, dq, presc);
+    let n = cur.n_dofs;
+    // triangles: co-rotational CST
+    let stress: Vec<[f64; 3]> = (0..cur.triangles.len())
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|t| {
+            let tri = cur.triangles[t];
+            let x0 = tri.map(|k| cur.nodes[k as usize]);
+            let (b0, _) = cst_b(x0);
+            // F = ∂x/∂X = I + ∇Δu (constant over a CST)
+            let mut f = [[1.0, 0.0], [0.0, 1.0]];
+            for k in 0..3 {
+                let d = du[tri[k] as usize];
+                for i in 0..2 {
+                    f[i][0] += d[i] * b0[0][2 * k];
+                    f[i][1] += d[i] * b0[1][2 * k + 1];
+                }
+            }
+            // polar decomposition in 2D: R = rotation by θ
+            let th = (f[1][0] - f[0][1]).atan2(f[0][0] + f[1][1]);
+            let (s, c) = th.sin_cos();
+            // U = Rᵀ F
+            let u = [
+                [c * f[0][0] + s * f[1][0], c * f[0][1] + s * f[1][1]],
+                [-s * f[0][0] + c * f[1][0], -s * f[0][1] + c * f[1][1]],
+            ];
+            let eps = [u[0][0] - 1.0, u[1][1] - 1.0, u[0][1] + u[1][0]];
+            let dt = system.tri_dt(t);
+            let s0 = committed.stress[t];
+            let mut sl = [0.0; 3];
+            for i in 0..3 {
+                sl[i] =
+                    s0[i] + (dt[i][0] * eps[0] + dt[i][1] * eps[1] + dt[i][2] * eps[2]) / thickness;
+            }
+            // σ = R σ_l Rᵀ
+            let (sxx, syy, sxy) = (sl[0], sl[1], sl[2]);
+            [
+                c * c * sxx - 2.0 * s * c * sxy + s * s * syy,
+                s * s * sxx + 2.0 * s * c * sxy + c * c * syy,
+                s * c * (sxx - syy) + (c * c - s * s) * sxy,
+            ]
+        })
+        .collect();
+    // contacts
+    let nc = cur.contacts.len();
+    let res: Vec<([f64; 2], ContactState)> = (0..nc)
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|k| {
+            let c = &cur.contacts[k];
+            let rel = sub(du[c.node_m as usize], du[c.node_l as usize]);
+            let n0 = c.normal;
+            let d = [
+                n0[0] * rel[0] + n0[1] * rel[1],
+                -n0[1] * rel[0] + n0[0] * rel[1],
+            ];
+            law.update(area[k], committed.force[k], d)
+        })
+        .collect();
+    let force: Vec<[f64; 2]> = res.iter().map(|r| r.0).collect();
+    let state: Vec<ContactState> = res.iter().map(|r| r.1).collect();
+    // internal force vector, serial in element order (deterministic)
+    let mut f_int = vec![0.0; n];
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let x = tri.map(|k| mesh.nodes[k as usize]);
+        let (b, area_t) = cst_b(x);
+        let s = stress[t];
+        for k in 0..6 {
+            let v = thickness * area_t * (b[0][k] * s[0] + b[1][k] * s[1] + b[2][k] * s[2]);
+            let dof = mesh.node_dofs[tri[k / 2] as usize][k % 2];
+            if dof != CONSTRAINED {
+                f_int[dof as usize] += v;
+            }
+        }
+    }
+    for (k, c) in mesh.contacts.iter().enumerate() {
+        let [fnn, fs] = force[k];
+        if fnn == 0.0 && fs == 0.0 {
+            continue;
+        }
+        let (ml, mm) = (mesh.node_map(c.node_l), mesh.node_map(c.node_m));
+        let gn = contact_gradient(&ml, &mm, c.normal);
+        let gs = contact_gradient(&ml, &mm, [-c.normal[1], c.normal[0]]);
+        for i in 0..6 {
+            let dof = if i < 3 { ml.dofs[i] } else { mm.dofs[i - 3] };
+            if dof != CONSTRAINED {
+                f_int[dof as usize] += fnn * gn[i] + fs * gs[i];
+            }
+        }
+    }
+    Trial {
+        mesh,
+        stress,
+        force,
+        state,
+        f_int,
+        dq: dq.to_vec(),
+    }
+}

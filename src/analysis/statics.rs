@@ -1,0 +1,740 @@
+//! Nonlinear static and capacity analysis (METHOD.md §4, seed §4): loads in increments of
+//! a load factor; in each increment, iterations in which the contacts' excess forces are
+//! re-applied (the residual λF − F_int) until the out-of-balance force is below a relative
+//! tolerance and no contact changes state; the geometry is updated after each converged
+//! increment. Failure (a mechanism) is a non-convergence after increment cutting; the
+//! capacity analysis brackets the critical load factor between the last converged and
+//! the first failed increment.
+
+use super::config::{evaluate, Committed, Trial};
+use super::mechanism::{classify, Mechanism};
+use super::{Outcome, Stats, Status};
+use crate::assembly::{loads, LocalStiffness, System};
+use crate::geometry::polygon::Point;
+use crate::material::{ContactLaw, ContactState, MohrCoulomb};
+use crate::mesh::Mesh;
+use crate::scene::{AnalysisType, Scene, Support};
+use crate::solve::LinearBackend;
+use crate::{Error, Result};
+use dfem_kernels::CsrMatrix;
+use std::time::Instant;
+
+/// The iteration strategy (`[analysis] strategy`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Strategy {
+    /// The elastic stiffness, factorized once: cheap solves, more iterations.
+    Initial,
+    /// The secant stiffness (open contacts carry nothing, slipping ones no shear),
+    /// numerically refactorized each iteration with the symbolic phase reused.
+    Secant,
+    /// Newton with the tangent (the friction term makes it nonsymmetric: LU).
+    Newton,
+}
+
+impl Strategy {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "initial" => Some(Strategy::Initial),
+            "secant" => Some(Strategy::Secant),
+            "newton" => Some(Strategy::Newton),
+            _ => None,
+        }
+    }
+}
+
+/// Settings of the nonlinear driver (`[analysis]` keys, with these defaults).
+#[derive(Debug, Clone)]
+pub struct Settings {
+    pub strategy: Strategy,
+    /// Relative out-of-balance tolerance ‖λF − F_int‖ / ‖λF‖.
+    pub tolerance: f64,
+    /// Iterations per increment before it is cut.
+    pub max_iterations: usize,
+    /// Halvings of an increment before the structure is declared failed.
+    pub max_cuts: usize,
+    /// Capacity: first step of the load factor, and the relative width of the final bracket.
+    pub initial_step: f64,
+    pub bracket: f64,
+    pub line_search: bool,
+}
+
+impl Settings {
+    pub fn from_scene(scene: &Scene) -> Result<Settings> {
+        let x = &scene.analysis.extra;
+        let place = |k: &str| format!("[analysis] key '{k}'");
+        let strategy = match x.get("strategy") {
+            None => Strategy::Secant,
+            Some(v) => v.as_str().and_then(Strategy::parse).ok_or_else(|| {
+                Error::new("unknown strategy")
+                    .place(place("strategy"))
+                    .fix("use \"initial\", \"secant\" or \"newton\"")
+            })?,
+        };
+        let num = |k: &str, d: f64, lo: f64, hi: f64| -> Result<f64> {
+            match x.get(k) {
+                None => Ok(d),
+                Some(v) => {
+                    let f = v
+                        .as_float()
+                        .or_else(|| v.as_integer().map(|i| i as f64))
+                        .unwrap_or(f64::NAN);
+                    if f.is_finite() && f >= lo && f <= hi {
+                        Ok(f)
+                    } else {
+                        Err(
+                            Error::new(format!("'{k}' must be a number from {lo} to {hi}"))
+                                .place(place(k))
+                                .fix(format!("for example {k} = {d}")),
+                        )
+                    }
+                }
+            }
+        };
+        let default_iters = if strategy == Strategy::Initial {
+            2000.0
+        } else {
+            300.0
+        };
+        Ok(Settings {
+            strategy,
+            tolerance: num("tolerance", 1e-6, 1e-14, 0.1)?,
+            max_iterations: num("max_iterations", default_iters, 1.0, 1e6)? as usize,
+            max_cuts: num("max_cuts", 6.0, 0.0, 30.0)? as usize,
+            initial_step: num("initial_step", 0.05, 1e-9, 1e3)?,
+            bracket: num("bracket", 1e-3, 1e-9, 0.5)?,
+            line_search: x
+                .get("line_search")
+                .and_then(|v| v.as_bool())
+                .unwrap_or(strategy != Strategy::Initial),
+        })
+    }
+}
+
+/// ε of the blended step K_s + ε K₀ taken when the secant matrix is singular.
+const BLEND: f64 = 1e-2;
+
+/// Keys of `[analysis]` read by this driver.
+pub const KEYS: &[&str] = &[
+    "strategy",
+    "tolerance",
+    "max_iterations",
+    "max_cuts",
+    "initial_step",
+    "bracket",
+    "line_search",
+];
+
+/// The loads of one phase as functions of its load factor.
+struct Phase {
+    /// External force at factor s: base + s · step (N).
+    base: Vec<f64>,
+    step: Vec<f64>,
+    /// Prescribed translation increment of each block per unit factor (m).
+    presc_step: Vec<Point>,
+}
+
+/// The nonlinear model being analysed.
+pub struct Driver<'a> {
+    scene: &'a Scene,
+    settings: Settings,
+    system: System,
+    law: MohrCoulomb,
+    area: Vec<f64>,
+    cur: Mesh,
+    committed: Committed,
+    k0: Option<CsrMatrix>,
+    kbuf: CsrMatrix,
+    pub stats: Stats,
+    backend: &'a mut dyn LinearBackend,
+    lu: Option<Box<dyn LinearBackend>>,
+    k0_factored: bool,
+    /// The last failing increment (unknowns) and the contact states of its last trial,
+    /// for the mechanism.
+    pub failure_mode: Option<Failure>,
+    /// Prescribed translation applied so far, per block (m).
+    presc_total: Vec<Point>,
+}
+
+/// The failing increment: its unknowns (the mode), the states and forces of its last
+/// trial, and the external force resultant on every block (N).
+#[derive(Debug, Clone)]
+pub struct Failure {
+    pub mode: Vec<f64>,
+    pub states: Vec<ContactState>,
+    pub forces: Vec<[f64; 2]>,
+    pub loads: Vec<[f64; 2]>,
+}
+
+/// Why an increment did not converge.
+#[derive(Debug, Clone)]
+enum IncrementFailure {
+    NoConvergence { residual: f64 },
+    Divergence,
+}
+
+impl<'a> Driver<'a> {
+    pub fn new(
+        scene: &'a Scene,
+        mesh: &Mesh,
+        backend: &'a mut dyn LinearBackend,
+    ) -> Result<Driver<'a>> {
+        let settings = Settings::from_scene(scene)?;
+        let system = System::new(scene, mesh);
+        let law = MohrCoulomb::from_joint(
+            &scene.joints[scene
+                .contacts
+                .joint
+                .min(scene.joints.len().saturating_sub(1))],
+        );
+        let t = scene.model.thickness;
+        let area = mesh.contacts.iter().map(|c| c.length * t).collect();
+        let kbuf = CsrMatrix::zeros(system.plan.pattern().clone());
+        Ok(Driver {
+            scene,
+            settings,
+            system,
+            law,
+            area,
+            cur: mesh.clone(),
+            committed: Committed::zero(mesh),
+            k0: None,
+            kbuf,
+            stats: Stats {
+                dofs: mesh.n_dofs,
+                contacts: mesh.contacts.len(),
+                triangles: mesh.triangles.len(),
+                ..Default::default()
+            },
+            backend,
+            lu: None,
+            k0_factored: false,
+            failure_mode: None,
+            presc_total: vec![[0.0; 2]; mesh.blocks.len()],
+        })
+    }
+
+    fn trial(&self, dq: &[f64], presc: &[Point]) -> Trial {
+        evaluate(
+            &self.system,
+            &self.cur,
+            &self.committed,
+            &self.law,
+            &self.area,
+            self.scene.model.thickness,
+            dq,
+            presc,
+        )
+    }
+
+    fn local_stiffness(&self, trial: &Trial, newton: bool) -> Vec<LocalStiffness> {
+        (0..self.area.len())
+            .map(|k| {
+                let s = self.law.springs(self.area[k]);
+                match trial.state[k] {
+                    ContactState::Stick => [[s.kn, 0.0], [0.0, s.ks]],
+                    ContactState::Open => [[0.0, 0.0], [0.0, 0.0]],
+                    ContactState::Slip if newton => {
+                        // Fₛ = ±(cA − Fₙ tan φ): ∂Fₛ/∂δₙ = ∓ tan φ kₙ
+                        let sg = trial.force[k][1].signum();
+                        [[s.kn, 0.0], [-sg * self.law.tan_phi * s.kn, 0.0]]
+                    }
+                    ContactState::Slip => [[s.kn, 0.0], [0.0, 0.0]],
+                }
+            })
+            .collect()
+    }
+
+    fn elastic_local(&self) -> Vec<LocalStiffness> {
+        self.area
+            .iter()
+            .map(|&a| crate::assembly::diagonal(self.law.springs(a)))
+            .collect()
+    }
+
+    /// Solve with the elastic stiffness of the initial configuration (factorized once).
+    fn solve_k0(&mut self, rhs: &mut [f64]) -> Result<bool> {
+        if !self.k0_factored {
+            let local = self.elastic_local();
+            let mut k = CsrMatrix::zeros(self.system.plan.pattern().clone());
+            self.system.stiffness_into(&self.cur, &local, &mut k);
+            let ok = self.backend.factorize(&k).is_ok()
+                && self.backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO;
+            self.k0 = Some(k);
+            self.k0_factored = true;
+            if !ok {
+                return Ok(false);
+            }
+        }
+        Ok(self.backend.solve(rhs).is_ok())
+    }
+
+    /// One correction δ = K⁻¹ r with the strategy's matrix; `None` when that matrix is
+    /// singular (a mechanism in the current contact states).
+    fn correction(&mut self, trial: &Trial, r: &[f64]) -> Result<Option<Vec<f64>>> {
+        let mut x = r.to_vec();
+        match self.settings.strategy {
+            Strategy::Initial => Ok(self.solve_k0(&mut x)?.then_some(x)),
+            Strategy::Secant | Strategy::Newton => {
+                let newton = self.settings.strategy == Strategy::Newton;
+                let local = self.local_stiffness(trial, newton);
+                self.system
+                    .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+                // the stiffness with the k0 backend is refactorized: k0 is not kept factored
+                self.k0_factored = false;
+                let backend: &mut dyn LinearBackend = if newton {
+                    if self.lu.is_none() {
+                        self.lu = Some(crate::solve::backend("faer-lu")?);
+                    }
+                    self.lu.as_mut().unwrap().as_mut()
+                } else {
+                    &mut *self.backend
+                };
+                let ok = backend.factorize(&self.kbuf).is_ok()
+                    && (newton || backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO)
+                    && backend.solve(&mut x).is_ok()
+                    && x.iter().all(|v| v.is_finite());
+                Ok(ok.then_some(x))
+            }
+        }
+    }
+
+    /// The mechanism of a singular secant matrix K_s: the solution of (K_s + ε K₀) x = r,
+    /// ε = 10⁻⁸, is dominated by the part of r that K_s cannot resist, i.e. by K_s's null
+    /// space (the blocks' free motions).
+    fn mechanism_mode(&mut self, trial: &Trial, r: &[f64]) -> Result<Vec<f64>> {
+        Ok(self
+            .blended_step(trial, r, 1e-8)?
+            .unwrap_or_else(|| vec![0.0; r.len()]))
+    }
+
+    /// Solve (K_s + ε K₀) x = r in the trial configuration.
+    fn blended_step(&mut self, trial: &Trial, r: &[f64], eps: f64) -> Result<Option<Vec<f64>>> {
+        let elastic = self.elastic_local();
+        let mut k0 = CsrMatrix::zeros(self.system.plan.pattern().clone());
+        self.system.stiffness_into(&trial.mesh, &elastic, &mut k0);
+        let local = self.local_stiffness(trial, false);
+        self.system
+            .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+        for (a, b) in self.kbuf.values.iter_mut().zip(&k0.values) {
+            *a += eps * b;
+        }
+        self.k0_factored = false;
+        let mut x = r.to_vec();
+        let ok = self.backend.factorize(&self.kbuf).is_ok()
+            && self.backend.solve(&mut x).is_ok()
+            && x.iter().all(|v| v.is_finite());
+        Ok(ok.then_some(x))
+    }
+
+    fn norm(v: &[f64]) -> f64 {
+        v.iter().map(|x| x * x).sum::<f64>().sqrt()
+    }
+
+    /// Iterate one increment to the external force `f_ext` and prescribed increments.
+    fn increment(
+        &mut self,
+        f_ext: &[f64],
+        presc: &[Point],
+    ) -> Result<std::result::Result<Trial, (IncrementFailure, Failure)>> {
+        let n = self.cur.n_dofs;
+        let mut dq = vec![0.0; n];
+        let mut trial = self.trial(&dq, presc);
+        let scale = Self::norm(f_ext).max(1e-300);
+        let size = self.model_size();
+        let mut prev_state = trial.state.clone();
+        let mut singular_streak = 0;
+        for it in 0..self.settings.max_iterations {
+            self.stats.iterations += 1;
+            let r: Vec<f64> = f_ext.iter().zip(&trial.f_int).map(|(a, b)| a - b).collect();
+            let rn = Self::norm(&r);
+            if std::env::var_os("DFEM_TRACE").is_some() {
+                eprintln!(
+                    "it {it} residual {:.3e} open {} slip {}",
+                    rn / scale,
+                    trial
+                        .state
+                        .iter()
+                        .filter(|s| **s == ContactState::Open)
+                        .count(),
+                    trial
+                        .state
+                        .iter()
+                        .filter(|s| **s == ContactState::Slip)
+                        .count()
+                );
+            }
+            if it > 0 && rn <= self.settings.tolerance * scale && trial.state == prev_state {
+                return Ok(Ok(trial));
+            }
+            prev_state = trial.state.clone();
+            let delta = match self.correction(&trial, &r)? {
+                Some(d) => {
+                    singular_streak = 0;
+                    d
+                }
+                None => {
+                    // the secant matrix is singular in the current states (a mechanism,
+                    // or a transient set of open contacts): step with K_s + ε K₀, stiffer
+                    // than the secant (so the iteration contracts, as the seed's
+                    // excess-force iteration with K₀ does) but much closer to it
+                    singular_streak += 1;
+                    match self.blended_step(&trial, &r, BLEND)? {
+                        Some(x) => x,
+                        None => {
+                            let mut x = r.clone();
+                            if !self.solve_k0(&mut x)? {
+                                return Ok(Err((
+                                    IncrementFailure::Divergence,
+                                    self.failure(dq, &trial, f_ext),
+                                )));
+                            }
+                            x
+                        }
+                    }
+                }
+            };
+            // line search on the out-of-balance norm
+            let mut alpha = 1.0;
+            let mut best: Option<(f64, Trial, Vec<f64>)> = None;
+            for _ in 0..if self.settings.line_search { 4 } else { 1 } {
+                let cand: Vec<f64> = dq.iter().zip(&delta).map(|(a, b)| a + alpha * b).collect();
+                let t = self.trial(&cand, presc);
+                let rn2 = Self::norm(
+                    &f_ext
+                        .iter()
+                        .zip(&t.f_int)
+                        .map(|(a, b)| a - b)
+                        .collect::<Vec<_>>(),
+                );
+                let better = best.as_ref().is_none_or(|b| rn2 < b.0);
+                if better {
+                    best = Some((rn2, t, cand));
+                }
+                if rn2 <= rn {
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            let (_, t, cand) = best.unwrap();
+            trial = t;
+            dq = cand;
+            let dmax = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if !dmax.is_finite() || dmax > 0.5 * size {
+                return Ok(Err((
+                    IncrementFailure::Divergence,
+                    self.failure(dq, &trial, f_ext),
+                )));
+            }
+        }
+        let r: Vec<f64> = f_ext.iter().zip(&trial.f_int).map(|(a, b)| a - b).collect();
+        let residual = Self::norm(&r) / scale;
+        // the mechanism: the null space of the secant matrix when it is singular, else
+        // the increment itself
+        let mode = if singular_streak > 0 && self.settings.strategy != Strategy::Initial {
+            self.mechanism_mode(&trial, &r)?
+        } else {
+            dq
+        };
+        Ok(Err((
+            IncrementFailure::NoConvergence { residual },
+            self.failure(mode, &trial, f_ext),
+        )))
+    }
+
+    fn failure(&self, mode: Vec<f64>, trial: &Trial, f_ext: &[f64]) -> Failure {
+        let loads = self
+            .cur
+            .blocks
+            .iter()
+            .map(|b| match b.dofs {
+                crate::mesh::BlockDofs::Rigid { first, .. } => {
+                    [f_ext[first as usize], f_ext[first as usize + 1]]
+                }
+                crate::mesh::BlockDofs::Deformable => b.nodes.clone().fold([0.0, 0.0], |a, n| {
+                    let d = self.cur.node_dofs[n as usize];
+                    [a[0] + f_ext[d[0] as usize], a[1] + f_ext[d[1] as usize]]
+                }),
+                crate::mesh::BlockDofs::Fixed => [0.0, 0.0],
+            })
+            .collect();
+        Failure {
+            mode,
+            states: trial.state.clone(),
+            forces: trial.force.clone(),
+            loads,
+        }
+    }
+
+    fn model_size(&self) -> f64 {
+        let b = crate::geometry::polygon::bbox(&self.cur.nodes);
+        (b[2] - b[0]).hypot(b[3] - b[1]).max(1e-9)
+    }
+
+    fn commit(&mut self, trial: Trial, dq: &[f64], presc: &[Point]) {
+        for (u, d) in self.committed.u.iter_mut().zip(dq) {
+            *u += d;
+        }
+        self.committed.stress = trial.stress;
+        self.committed.force = trial.force;
+        self.committed.state = trial.state;
+        self.cur = trial.mesh;
+        for (t, p) in self.presc_total.iter_mut().zip(presc) {
+            t[0] += p[0];
+            t[1] += p[1];
+        }
+        self.stats.increments += 1;
+    }
+
+    /// Run a phase from factor 0 to 1 in `steps` increments (cut when they fail).
+    /// Returns the factor reached (1 when the phase completed).
+    fn run_phase(&mut self, phase: &Phase, steps: usize) -> Result<(f64, Option<String>)> {
+        let mut s = 0.0;
+        let mut ds = 1.0 / steps as f64;
+        let mut cuts = 0;
+        while s < 1.0 - 1e-12 {
+            let target = (s + ds).min(1.0);
+            let f: Vec<f64> = phase
+                .base
+                .iter()
+                .zip(&phase.step)
+                .map(|(b, st)| b + target * st)
+                .collect();
+            let presc: Vec<Point> = phase
+                .presc_step
+                .iter()
+                .map(|p| [p[0] * (target - s), p[1] * (target - s)])
+                .collect();
+            match self.increment(&f, &presc)? {
+                Ok(trial) => {
+                    let dq = trial.dq.clone();
+                    self.commit(trial, &dq, &presc);
+                    s = target;
+                }
+                Err((why, dq)) => {
+                    self.failure_mode = Some(dq);
+                    if cuts >= self.settings.max_cuts {
+                        return Ok((s, Some(describe(&why))));
+                    }
+                    cuts += 1;
+                    ds *= 0.5;
+                }
+            }
+        }
+        Ok((1.0, None))
+    }
+
+    fn external(&self, acc: Point, with_loads: bool) -> Vec<f64> {
+        let mut f = loads::body_force(self.scene, &self.cur, acc);
+        if with_loads {
+            for (a, b) in f.iter_mut().zip(loads::applied(self.scene, &self.cur)) {
+                *a += b;
+            }
+        }
+        f
+    }
+
+    fn outcome(
+        &self,
+        status: Status,
+        mesh0: &Mesh,
+        load_factor: Option<f64>,
+        mechanism: Option<Mechanism>,
+    ) -> Outcome {
+        let node_disp = self
+            .cur
+            .nodes
+            .iter()
+            .zip(&mesh0.nodes)
+            .map(|(a, b)| [a[0] - b[0], a[1] - b[1]])
+            .collect();
+        Outcome {
+            status,
+            u: self.committed.u.clone(),
+            node_disp,
+            stress: self.committed.stress.clone(),
+            contact_forces: self.committed.force.clone(),
+            contact_states: self.committed.state.clone(),
+            stats: self.stats.clone(),
+            load_factor,
+            mechanism,
+            current: Some(self.cur.clone()),
+        }
+    }
+}
+
+fn describe(why: &IncrementFailure) -> String {
+    match why {
+        IncrementFailure::NoConvergence { residual } => format!("the out-of-balance force stays at {residual:.2e} of the load: the contacts cannot hold it"),
+        IncrementFailure::Divergence => "the displacements grow without bound: the blocks move without restraint".to_string(),
+    }
+}
+
+/// Run a static or capacity analysis.
+pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Result<Outcome> {
+    let start = Instant::now();
+    let mut d = Driver::new(scene, mesh, backend)?;
+    let steps = scene.analysis.load_steps;
+    let g = scene.model.gravity;
+    let gnorm = g[0].hypot(g[1]);
+    let n = mesh.n_dofs;
+    let zero_presc = vec![[0.0; 2]; mesh.blocks.len()];
+    let finish = |d: &mut Driver, status: Status, lf: Option<f64>, mech: Option<Mechanism>| {
+        let bs = d.backend.stats();
+        d.stats.factorizations = bs.numeric_factorizations
+            + d.lu
+                .as_ref()
+                .map_or(0, |l| l.stats().numeric_factorizations);
+        d.stats.symbolic_factorizations = bs.symbolic_factorizations
+            + d.lu
+                .as_ref()
+                .map_or(0, |l| l.stats().symbolic_factorizations);
+        d.stats.min_pivot_ratio = bs.min_pivot_ratio;
+        d.stats.wall_time_s = start.elapsed().as_secs_f64();
+        d.outcome(status, mesh, lf, mech)
+    };
+    let fail = |d: &mut Driver, what: String, lf: Option<f64>| -> Outcome {
+        let mech = d
+            .failure_mode
+            .as_ref()
+            .map(|f| classify(scene, &d.cur, &f.mode, &f.states, &f.forces, &f.loads));
+        let blocks = mech.as_ref().map(|m| m.moving()).unwrap_or_default();
+        finish(
+            d,
+            Status::Failed {
+                reason: what,
+                blocks,
+            },
+            lf,
+            mech,
+        )
+    };
+
+    // phase 1: gravity and loads
+    let f_grav = d.external(g, true);
+    let phase = Phase {
+        base: vec![0.0; n],
+        step: f_grav.clone(),
+        presc_step: zero_presc.clone(),
+    };
+    let (s, why) = d.run_phase(&phase, steps)?;
+    if let Some(why) = why {
+        return Ok(fail(
+            &mut d,
+            format!(
+                "failed under gravity at {:.1} % of the self-weight: {why}",
+                100.0 * s
+            ),
+            None,
+        ));
+    }
+    // phase 2: prescribed displacements of fixed blocks
+    let presc: Vec<Point> = scene
+        .blocks
+        .iter()
+        .map(|b| b.prescribed.unwrap_or([0.0; 2]))
+        .collect();
+    if presc.iter().any(|p| *p != [0.0; 2]) {
+        let phase = Phase {
+            base: f_grav.clone(),
+            step: vec![0.0; n],
+            presc_step: presc,
+        };
+        let (s, why) = d.run_phase(&phase, steps)?;
+        if let Some(why) = why {
+            return Ok(fail(
+                &mut d,
+                format!(
+                    "failed at {:.1} % of the prescribed displacement: {why}",
+                    100.0 * s
+                ),
+                None,
+            ));
+        }
+    }
+    let f_base = d.external(g, true);
+    let f_lat = d.external([gnorm, 0.0], false);
+    match scene.analysis.kind {
+        AnalysisType::Static => {
+            if scene.analysis.lateral != 0.0 {
+                let step: Vec<f64> = f_lat.iter().map(|x| x * scene.analysis.lateral).collect();
+                let phase = Phase {
+                    base: f_base,
+                    step,
+                    presc_step: zero_presc,
+                };
+                let (s, why) = d.run_phase(&phase, steps)?;
+                if let Some(why) = why {
+                    return Ok(fail(
+                        &mut d,
+                        format!(
+                            "failed at a lateral coefficient of {:.4}: {why}",
+                            s * scene.analysis.lateral
+                        ),
+                        Some(s * scene.analysis.lateral),
+                    ));
+                }
+            }
+            Ok(finish(&mut d, Status::Stable, None, None))
+        }
+        AnalysisType::Capacity => {
+            let dir = scene.analysis.direction;
+            let mut lambda: f64 = 0.0;
+            let mut step = d.settings.initial_step;
+            let mut last_fail: Option<String> = None;
+            let mut upper = f64::INFINITY;
+            let limit = 1e3;
+            loop {
+                if step <= d.settings.bracket * lambda.max(d.settings.initial_step * 1e-3)
+                    || lambda > limit
+                {
+                    break;
+                }
+                let target = lambda + step;
+                let f: Vec<f64> = f_base
+                    .iter()
+                    .zip(&f_lat)
+                    .map(|(b, l)| b + dir * target * l)
+                    .collect();
+                match d.increment(&f, &zero_presc)? {
+                    Ok(trial) => {
+                        let dq = trial.dq.clone();
+                        d.commit(trial, &dq, &zero_presc);
+                        lambda = target;
+                        if upper.is_infinite() {
+                            step *= 1.5;
+                        }
+                        step = step.min(0.5 * (upper - lambda)).max(0.0);
+                        if upper.is_finite() && step <= 0.0 {
+                            break;
+                        }
+                    }
+                    Err((why, dq)) => {
+                        d.failure_mode = Some(dq);
+                        upper = upper.min(target);
+                        last_fail = Some(describe(&why));
+                        step *= 0.5;
+                    }
+                }
+            }
+            if lambda > limit {
+                return Ok(finish(&mut d, Status::Stable, Some(lambda), None));
+            }
+            let mut out = fail(
+                &mut d,
+                format!(
+                    "critical load factor {lambda:.6} (bracket [{lambda:.6}, {upper:.6}]): {}",
+                    last_fail.unwrap_or_default()
+                ),
+                Some(lambda),
+            );
+            out.load_factor = Some(lambda);
+            Ok(out)
+        }
+        AnalysisType::Dynamic => unreachable!("the dynamic driver runs elsewhere"),
+    }
+}
+
+/// Whether any block is fixed (a static analysis needs one).
+pub fn has_support(scene: &Scene) -> bool {
+    scene.blocks.iter().any(|b| b.support == Support::Fixed)
+}

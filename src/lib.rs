@@ -1,0 +1,17 @@
+//! dfem: the discrete finite element method (DFEM) for masonry and blocky rock.
+//!
+//! Data flows one way (see `docs/` and the shared DESIGN.md):
+//! scene → geometry → mesh → assembly → linear backend (`dfem_kernels`) → analysis → output.
+
+pub mod analysis;
+pub mod assembly;
+pub mod cli;
+pub mod error;
+pub mod geometry;
+pub mod material;
+pub mod mesh;
+pub mod output;
+pub mod scene;
+pub mod solve;
+
+pub use error::{Error, Result};

@@ -1,0 +1,127 @@
+//! Constitutive laws: the blocks' elastic matrix (METHOD.md section 2) and the contact
+//! band (METHOD.md section 3) behind the [`ContactLaw`] trait.
+
+pub mod mohr_coulomb;
+
+pub use mohr_coulomb::MohrCoulomb;
+
+use crate::scene::{Joint, Material, Plane};
+
+/// Elastic matrix Dₑ (Pa) in Voigt order (xx, yy, xy engineering shear), METHOD.md §2.
+/// Plane strain: [[λ+2μ, λ, 0], [λ, λ+2μ, 0], [0, 0, μ]]. Plane stress: the same with
+/// λ replaced by 2λμ/(λ+2μ) (σ_zz = 0).
+pub fn elastic_matrix(lambda: f64, mu: f64, plane: Plane) -> [[f64; 3]; 3] {
+    let l = match plane {
+        Plane::Strain => lambda,
+        Plane::Stress => 2.0 * lambda * mu / (lambda + 2.0 * mu),
+    };
+    [
+        [l + 2.0 * mu, l, 0.0],
+        [l, l + 2.0 * mu, 0.0],
+        [0.0, 0.0, mu],
+    ]
+}
+
+/// Dₑ of a block material.
+pub fn block_elastic(m: &Material, plane: Plane) -> [[f64; 3]; 3] {
+    elastic_matrix(m.lame_lambda, m.lame_mu, plane)
+}
+
+/// Young's modulus E (Pa) and Poisson's ratio ν from the Lamé constants.
+pub fn young_poisson(lambda: f64, mu: f64) -> (f64, f64) {
+    (
+        mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu),
+        lambda / (2.0 * (lambda + mu)),
+    )
+}
+
+/// State of a contact (METHOD.md §3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactState {
+    Stick,
+    Slip,
+    Open,
+}
+
+impl ContactState {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ContactState::Stick => "stick",
+            ContactState::Slip => "slip",
+            ContactState::Open => "open",
+        }
+    }
+    /// Integer code for VTK cell data: 0 stick, 1 slip, 2 open.
+    pub fn code(self) -> i32 {
+        self as i32
+    }
+}
+
+/// Springs of one contact (N/m): kₙ = Eₙ A_c / h, kₛ = Gₛ A_c / h (METHOD.md §3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactSprings {
+    pub kn: f64,
+    pub ks: f64,
+}
+
+/// A contact law maps an increment of relative displacement of a contact (normal Δδₙ,
+/// shear Δδₛ, m) from the forces committed at the start of the increment (Fₙ₀, Fₛ₀, N) to
+/// the new forces (N) and state. The elastic band is the linear law; tension cut-off,
+/// Mohr–Coulomb and softening laws implement the same trait.
+pub trait ContactLaw: Sync + Send {
+    /// Elastic springs of a contact of area `area` (m²).
+    fn springs(&self, area: f64) -> ContactSprings;
+    /// Forces (normal, shear; N) and state after the increment `d` = (Δδₙ, Δδₛ) (m).
+    fn update(&self, area: f64, committed: [f64; 2], d: [f64; 2]) -> ([f64; 2], ContactState);
+}
+
+/// The elastic band without strength limits (METHOD.md §3, stick state everywhere).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ElasticBand {
+    /// Eₙ and Gₛ (Pa), band thickness h (m).
+    pub normal_modulus: f64,
+    pub shear_modulus: f64,
+    pub band: f64,
+}
+
+impl ElasticBand {
+    pub fn from_joint(j: &Joint) -> Self {
+        ElasticBand {
+            normal_modulus: j.normal_modulus,
+            shear_modulus: j.shear_modulus,
+            band: j.band,
+        }
+    }
+}
+
+impl ContactLaw for ElasticBand {
+    fn springs(&self, area: f64) -> ContactSprings {
+        ContactSprings {
+            kn: self.normal_modulus * area / self.band,
+            ks: self.shear_modulus * area / self.band,
+        }
+    }
+    fn update(&self, area: f64, committed: [f64; 2], d: [f64; 2]) -> ([f64; 2], ContactState) {
+        let k = self.springs(area);
+        (
+            [committed[0] + k.kn * d[0], committed[1] + k.ks * d[1]],
+            ContactState::Stick,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_stress_reduces_to_e_nu() {
+        let (lambda, mu) = (56e9, 21e9);
+        let (e, nu) = young_poisson(lambda, mu);
+        let d = elastic_matrix(lambda, mu, Plane::Stress);
+        let f = e / (1.0 - nu * nu);
+        assert!((d[0][0] - f).abs() < 1e-6 * f);
+        assert!((d[0][1] - f * nu).abs() < 1e-6 * f);
+        assert!((d[2][2] - mu).abs() < 1e-6 * mu);
+    }
+}

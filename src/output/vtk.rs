@@ -1,0 +1,204 @@
+//! ParaView files: one `.vtu` of the blocks (triangles of deformable blocks, polygons of
+//! rigid and fixed blocks) and one of the contacts (line cells) per step, and a `.pvd`
+//! collection. ASCII XML: small, dependable, readable by ParaView, meshio and VTK.
+
+use super::write_atomic;
+use crate::analysis::Outcome;
+use crate::mesh::{BlockDofs, Mesh};
+use crate::scene::Scene;
+use crate::Result;
+use std::fmt::Write;
+use std::path::Path;
+
+const VTK_LINE: u8 = 3;
+const VTK_TRIANGLE: u8 = 5;
+const VTK_POLYGON: u8 = 7;
+
+fn data_array(s: &mut String, name: &str, comps: usize, vals: impl Iterator<Item = f64>) {
+    let _ = write!(s, "<DataArray type=\"Float64\" Name=\"{name}\" NumberOfComponents=\"{comps}\" format=\"ascii\">");
+    for v in vals {
+        let _ = write!(s, "{v:e} ");
+    }
+    s.push_str("</DataArray>\n");
+}
+
+fn int_array(s: &mut String, ty: &str, name: &str, vals: impl Iterator<Item = i64>) {
+    let _ = write!(
+        s,
+        "<DataArray type=\"{ty}\" Name=\"{name}\" format=\"ascii\">"
+    );
+    for v in vals {
+        let _ = write!(s, "{v} ");
+    }
+    s.push_str("</DataArray>\n");
+}
+
+fn piece(s: &mut String, points: &[[f64; 2]], cells: &[Vec<u32>], types: &[u8]) {
+    let _ = writeln!(
+        s,
+        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+        points.len(),
+        cells.len()
+    );
+    s.push_str("<Points>\n");
+    data_array(
+        s,
+        "Points",
+        3,
+        points.iter().flat_map(|p| [p[0], p[1], 0.0]),
+    );
+    s.push_str("</Points>\n<Cells>\n");
+    int_array(
+        s,
+        "Int64",
+        "connectivity",
+        cells.iter().flatten().map(|&n| n as i64),
+    );
+    let mut off = 0i64;
+    int_array(
+        s,
+        "Int64",
+        "offsets",
+        cells.iter().map(|c| {
+            off += c.len() as i64;
+            off
+        }),
+    );
+    int_array(s, "UInt8", "types", types.iter().map(|&t| t as i64));
+    s.push_str("</Cells>\n");
+}
+
+const HEAD: &str = "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n";
+const TAIL: &str = "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+
+/// Write `blocks_NNNN.vtu` and `contacts_NNNN.vtu` for one step.
+pub fn write_step(
+    dir: &Path,
+    step: usize,
+    _time: f64,
+    scene: &Scene,
+    mesh: &Mesh,
+    out: &Outcome,
+) -> Result<()> {
+    let disp = &out.node_disp;
+    let stress = out.stress.clone();
+    // cells: triangles of deformable blocks, then one polygon per rigid or fixed block
+    let mut cells: Vec<Vec<u32>> = mesh.triangles.iter().map(|t| t.to_vec()).collect();
+    let mut types = vec![VTK_TRIANGLE; cells.len()];
+    let mut cell_block: Vec<u32> = mesh.tri_block.clone();
+    let mut cell_stress: Vec<[f64; 3]> = stress;
+    for (i, b) in mesh.blocks.iter().enumerate() {
+        if b.dofs != BlockDofs::Deformable {
+            cells.push(b.boundary.clone());
+            types.push(VTK_POLYGON);
+            cell_block.push(i as u32);
+            cell_stress.push([0.0; 3]);
+        }
+    }
+    let mut s = String::from(HEAD);
+    piece(&mut s, &mesh.nodes, &cells, &types);
+    s.push_str("<PointData Vectors=\"displacement_m\">\n");
+    data_array(
+        &mut s,
+        "displacement_m",
+        3,
+        disp.iter().flat_map(|d| [d[0], d[1], 0.0]),
+    );
+    s.push_str("</PointData>\n<CellData>\n");
+    data_array(&mut s, "stress_Pa", 3, cell_stress.iter().flat_map(|x| *x));
+    int_array(
+        &mut s,
+        "Int32",
+        "block",
+        cell_block.iter().map(|&b| b as i64),
+    );
+    int_array(
+        &mut s,
+        "Int32",
+        "fixed",
+        cell_block
+            .iter()
+            .map(|&b| (mesh.blocks[b as usize].dofs == BlockDofs::Fixed) as i64),
+    );
+    s.push_str("</CellData>\n");
+    s.push_str(TAIL);
+    write_atomic(&dir.join(format!("blocks_{step:04}.vtu")), s.as_bytes())?;
+
+    // contacts: a line cell from node l to node m (coincident at the start)
+    let mut pts = Vec::with_capacity(2 * mesh.contacts.len());
+    let mut cdisp = Vec::with_capacity(2 * mesh.contacts.len());
+    let mut ccells = Vec::with_capacity(mesh.contacts.len());
+    for (k, c) in mesh.contacts.iter().enumerate() {
+        pts.push(mesh.nodes[c.node_l as usize]);
+        pts.push(mesh.nodes[c.node_m as usize]);
+        cdisp.push(disp[c.node_l as usize]);
+        cdisp.push(disp[c.node_m as usize]);
+        ccells.push(vec![2 * k as u32, 2 * k as u32 + 1]);
+    }
+    let mut s = String::from(HEAD);
+    piece(&mut s, &pts, &ccells, &vec![VTK_LINE; ccells.len()]);
+    s.push_str("<PointData Vectors=\"displacement_m\">\n");
+    data_array(
+        &mut s,
+        "displacement_m",
+        3,
+        cdisp.iter().flat_map(|d| [d[0], d[1], 0.0]),
+    );
+    s.push_str("</PointData>\n<CellData>\n");
+    data_array(
+        &mut s,
+        "normal_force_N",
+        1,
+        out.contact_forces.iter().map(|f| f[0]),
+    );
+    data_array(
+        &mut s,
+        "shear_force_N",
+        1,
+        out.contact_forces.iter().map(|f| f[1]),
+    );
+    data_array(
+        &mut s,
+        "normal",
+        3,
+        mesh.contacts
+            .iter()
+            .flat_map(|c| [c.normal[0], c.normal[1], 0.0]),
+    );
+    data_array(
+        &mut s,
+        "area_m2",
+        1,
+        mesh.contacts
+            .iter()
+            .map(|c| c.length * scene.model.thickness),
+    );
+    int_array(
+        &mut s,
+        "Int32",
+        "state_0stick_1slip_2open",
+        out.contact_states.iter().map(|st| st.code() as i64),
+    );
+    s.push_str("</CellData>\n");
+    s.push_str(TAIL);
+    write_atomic(&dir.join(format!("contacts_{step:04}.vtu")), s.as_bytes())
+}
+
+/// Write `results.pvd`, the collection of the steps written (time, step number).
+pub fn write_pvd(dir: &Path, steps: &[(f64, usize)]) -> Result<()> {
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
+    );
+    for &(t, k) in steps {
+        let _ = writeln!(
+            s,
+            "<DataSet timestep=\"{t:e}\" part=\"0\" file=\"blocks_{k:04}.vtu\"/>"
+        );
+        let _ = writeln!(
+            s,
+            "<DataSet timestep=\"{t:e}\" part=\"1\" file=\"contacts_{k:04}.vtu\"/>"
+        );
+    }
+    s.push_str("</Collection>\n</VTKFile>\n");
+    write_atomic(&dir.join("results.pvd"), s.as_bytes())
+}

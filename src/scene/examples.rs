@@ -1,0 +1,356 @@
+//! Built-in example scenes (`dfem example NAME`): one per generator, plus a wall with a
+//! window and a door. Each is small (under 300 blocks) and runs a static analysis.
+
+/// (name, one-line description, TOML text)
+pub const EXAMPLES: &[(&str, &str, &str)] = &[
+    ("incline", "one block on a 30 degree incline, phi = 20 degrees: it slides (Hoek and Bray; seed section 4.1)", INCLINE),
+    ("wall", "a dry-joint running-bond brick wall, 10 courses of 5 bricks, on a fixed base", WALL),
+    ("wall-window", "a running-bond brick wall 4 m x 2.4 m with a window and a door", WALL_WINDOW),
+    ("arch", "a semicircular arch of 13 voussoirs on two piers (seed section 4.3, Table 2 properties)", ARCH),
+    ("tower", "a masonry tower section 2 m x 8 m, 16 courses, with a door", TOWER),
+    ("slope", "the Goodman and Bray (1976) toppling rock slope: 16 columns on a stepped base", SLOPE),
+    ("tunnel", "a circular tunnel in rock cut by two joint sets, inside a fixed frame", TUNNEL),
+];
+
+pub fn get(name: &str) -> Option<&'static str> {
+    EXAMPLES.iter().find(|e| e.0 == name).map(|e| e.2)
+}
+
+const INCLINE: &str = r#"title = "One block on a 30 degree incline (Hoek and Bray 1977; seed section 4.1)"
+# alpha = 30 > phi = 20 and b/d = 1 > tan(alpha): the block slides.
+
+[model]
+plane = "strain"
+thickness = 1.0
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "rock"
+lame_lambda = 56e9
+lame_mu = 21e9
+unit_weight = 25e3
+
+[[joint]]
+name = "rock-rock"
+normal_modulus = 50e9
+shear_modulus = 0.5e9
+band = 0.010
+friction_angle = 20.0
+
+[[generate]]
+type = "incline"
+material = "rock"
+slope_angle = 30.0
+breadth = 1.0
+height = 1.0
+
+[contacts]
+joint = "rock-rock"
+tolerance = 1e-6
+
+[analysis]
+type = "static"
+"#;
+
+const WALL: &str = r#"title = "Running-bond brick wall on a fixed base"
+# Bricks 0.4 m x 0.2 m (joint thickness included, Lourenco's simplified micro-model),
+# E = 5 GPa, nu = 0.2; joint stiffness kn = 82 N/mm3, ks = 36 N/mm3 over a 10 mm band.
+
+[model]
+plane = "stress"
+thickness = 0.1
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "brick"
+lame_lambda = 1.389e9
+lame_mu = 2.083e9
+unit_weight = 18e3
+
+[[joint]]
+name = "dry-joint"
+normal_modulus = 8.2e8
+shear_modulus = 3.6e8
+band = 0.010
+friction_angle = 36.87
+cohesion = 0.0
+
+[[generate]]
+type = "wall"
+material = "brick"
+courses = 10
+bricks_per_course = 5
+brick_length = 0.4
+brick_height = 0.2
+joint = 0.0
+
+[contacts]
+joint = "dry-joint"
+tolerance = 1e-6
+
+[analysis]
+type = "static"
+"#;
+
+const WALL_WINDOW: &str = r#"title = "Brick wall with a window and a door"
+# 12 courses of 10 bricks 0.4 m x 0.2 m: 4.0 m x 2.4 m. The window (1.0 m x 0.8 m) and the
+# door (0.8 m x 2.0 m) cut the bricks they cross; bricks wholly inside are removed.
+# The top beam ties the wall above the openings.
+
+[model]
+plane = "stress"
+thickness = 0.1
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "brick"
+lame_lambda = 1.389e9
+lame_mu = 2.083e9
+unit_weight = 18e3
+
+[[joint]]
+name = "mortar"
+normal_modulus = 8.2e8
+shear_modulus = 3.6e8
+band = 0.010
+friction_angle = 36.87
+cohesion = 0.35e6
+tensile_strength = 0.25e6
+
+[[generate]]
+type = "wall"
+material = "brick"
+courses = 12
+bricks_per_course = 10
+brick_length = 0.4
+brick_height = 0.2
+top_beam = true
+openings = [
+  { x = 0.5, y = 1.1, width = 1.0, height = 0.8 },   # window
+  { x = 2.6, y = 0.0, width = 0.8, height = 2.0 },   # door
+]
+
+[contacts]
+joint = "mortar"
+tolerance = 1e-6
+
+[analysis]
+type = "static"
+"#;
+
+const ARCH: &str = r#"title = "Semicircular masonry arch on two piers (seed section 4.3, Table 2)"
+# Span 4 m, 13 voussoirs 0.4 m thick; piers 2 m high in 4 courses on a fixed base.
+
+[model]
+plane = "strain"
+thickness = 1.0
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "masonry"
+lame_lambda = 30e6
+lame_mu = 30e6
+viscous_lambda = 30e6
+viscous_mu = 30e6
+unit_weight = 25e3
+
+[[joint]]
+name = "masonry-joint"
+normal_modulus = 50e6
+shear_modulus = 25e6
+normal_viscosity = 5e6
+shear_viscosity = 2.5e6
+band = 0.005
+friction_angle = 35.0
+
+[[generate]]
+type = "arch"
+material = "masonry"
+shape = "semicircular"
+span = 4.0
+thickness = 0.4
+voussoirs = 13
+pier_height = 2.0
+pier_courses = 4
+
+[contacts]
+joint = "masonry-joint"
+tolerance = 1e-6
+
+[analysis]
+type = "static"
+"#;
+
+const TOWER: &str = r#"title = "Masonry tower section with a door"
+# 2 m wide, 8 m high, 16 courses of 2 stones (running bond), stone masonry E = 5 GPa.
+
+[model]
+plane = "stress"
+thickness = 1.0
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "stone"
+lame_lambda = 1.389e9
+lame_mu = 2.083e9
+unit_weight = 22e3
+
+[[joint]]
+name = "stone-joint"
+normal_modulus = 2e9
+shear_modulus = 0.8e9
+band = 0.010
+friction_angle = 35.0
+
+[[generate]]
+type = "tower"
+material = "stone"
+width = 2.0
+height = 8.0
+courses = 16
+blocks_per_course = 2
+openings = [{ x = 0.6, y = 0.0, width = 0.8, height = 2.0 }]
+
+[contacts]
+joint = "stone-joint"
+tolerance = 1e-6
+
+[analysis]
+type = "static"
+"#;
+
+const SLOPE: &str = r#"title = "Toppling rock slope (Goodman and Bray 1976 worked example)"
+# Columns 10 m wide, joints dipping 60 degrees into the slope, base stepped at 35.8
+# degrees, heights 4, 8, ..., 40 (crest), 34.1, ..., 4.6 m; gamma = 25 kN/m3.
+# Limit equilibrium: the slope just stands at phi = 38.15 degrees; here phi = 40.
+
+[model]
+plane = "strain"
+thickness = 1.0
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "rock"
+lame_lambda = 10e9
+lame_mu = 10e9
+unit_weight = 25e3
+
+[[joint]]
+name = "rock-joint"
+normal_modulus = 10e9
+shear_modulus = 1e9
+band = 0.05
+friction_angle = 40.0
+
+[[generate]]
+type = "slope"
+material = "rock"
+column_width = 10.0
+joint_dip = 60.0
+step = 1.0
+heights = [4.0, 8.0, 12.0, 16.0, 20.0, 24.0, 28.0, 32.0, 36.0, 40.0, 34.1, 28.2, 22.3, 16.4, 10.5, 4.6]
+
+[contacts]
+joint = "rock-joint"
+tolerance = 1e-6
+
+[analysis]
+type = "static"
+"#;
+
+const TUNNEL: &str = r#"title = "Circular tunnel in jointed rock"
+# A 20 m x 20 m domain, a tunnel of radius 3 m at its centre, two joint sets (dips 30 and
+# 120 degrees, spacing 2 m), inside a fixed frame 1 m thick.
+
+[model]
+plane = "strain"
+thickness = 1.0
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "rock"
+lame_lambda = 10e9
+lame_mu = 10e9
+unit_weight = 26e3
+
+[[joint]]
+name = "rock-joint"
+normal_modulus = 20e9
+shear_modulus = 2e9
+band = 0.010
+friction_angle = 35.0
+cohesion = 50e3
+
+[[generate]]
+type = "tunnel"
+material = "rock"
+width = 20.0
+height = 20.0
+frame = 1.0
+joint_sets = [
+  { dip = 30.0, spacing = 2.0 },
+  { dip = 120.0, spacing = 2.0 },
+]
+opening = { shape = "circle", radius = 3.0, segments = 32 }
+
+[contacts]
+joint = "rock-joint"
+tolerance = 1e-6
+
+[analysis]
+type = "static"
+"#;
+
+#[cfg(test)]
+mod tests {
+    use super::super::generate::{generate, TYPES};
+    use super::EXAMPLES;
+
+    #[test]
+    fn every_example_parses_and_generates() {
+        let mut names: Vec<&str> = EXAMPLES.iter().map(|e| e.0).collect();
+        for t in TYPES {
+            assert!(names.contains(t), "no example for {t}");
+        }
+        assert!(names.contains(&"wall-window"));
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), EXAMPLES.len(), "example names repeat");
+        for (name, desc, text) in EXAMPLES {
+            assert!(!desc.is_empty());
+            let doc: toml::Table = text.parse().unwrap_or_else(|e| panic!("{name}: {e}"));
+            let gens = doc["generate"].as_array().expect("a [[generate]] entry");
+            assert_eq!(gens.len(), 1, "{name}");
+            let mut params = gens[0].as_table().unwrap().clone();
+            let kind = params.remove("type").unwrap().as_str().unwrap().to_string();
+            let mat = params
+                .remove("material")
+                .unwrap()
+                .as_str()
+                .unwrap()
+                .to_string();
+            for k in ["name", "base_material", "kind", "mesh_size"] {
+                params.remove(k);
+            }
+            let mats = doc["material"].as_array().unwrap();
+            assert!(
+                mats.iter().any(|m| m["name"].as_str() == Some(&mat)),
+                "{name}: material {mat}"
+            );
+            let joint = doc["contacts"]["joint"].as_str().unwrap();
+            assert!(doc["joint"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|j| j["name"].as_str() == Some(joint)));
+            assert_eq!(doc["analysis"]["type"].as_str(), Some("static"));
+            let blocks = generate(&kind, &params).unwrap_or_else(|e| panic!("{name}: {e:?}"));
+            assert!(
+                blocks.len() >= 2 && blocks.len() < 300,
+                "{name}: {} blocks",
+                blocks.len()
+            );
+            assert!(blocks.iter().any(|b| b.fixed) && blocks.iter().any(|b| !b.fixed));
+        }
+    }
+}

@@ -1,0 +1,187 @@
+//! Scene: the validated model read from a TOML file (`INTERFACE.md`, "Scene file").
+//!
+//! [`parse`] turns text into a [`Scene`], checking everything before any work is done;
+//! [`generate`] expands `[[generate]]` entries into blocks; [`examples`] holds the
+//! built-in example scenes of `dfem example`.
+
+pub mod examples;
+pub mod generate;
+pub mod parse;
+
+pub use parse::{load, parse_str};
+
+/// 2D idealisation of the out-of-plane direction (METHOD.md section 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plane {
+    Strain,
+    Stress,
+}
+
+/// `[model]`: plane, thickness (m), gravity (m/s²).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Model {
+    pub plane: Plane,
+    /// Out-of-plane thickness `t`, m.
+    pub thickness: f64,
+    /// Gravity acceleration vector, m/s².
+    pub gravity: [f64; 2],
+}
+
+/// `[[material]]`: an elastic (Kelvin–Voigt) block material (METHOD.md section 2).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Lamé λ, Pa.
+    pub lame_lambda: f64,
+    /// Lamé μ (shear modulus), Pa.
+    pub lame_mu: f64,
+    /// Unit weight γ, N/m³; mass density ρ = γ / 9.81.
+    pub unit_weight: f64,
+    /// Viscous Lamé λ*, Pa·s.
+    pub viscous_lambda: f64,
+    /// Viscous Lamé μ*, Pa·s.
+    pub viscous_mu: f64,
+}
+
+/// Standard gravity used to turn a unit weight into a mass density (METHOD.md, units).
+pub const STANDARD_GRAVITY: f64 = 9.81;
+
+impl Material {
+    /// Mass density ρ = γ / g, kg/m³.
+    pub fn density(&self) -> f64 {
+        self.unit_weight / STANDARD_GRAVITY
+    }
+}
+
+/// `[[joint]]`: band-type contact properties (METHOD.md section 3).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Joint {
+    pub name: String,
+    /// Eₙ, Pa.
+    pub normal_modulus: f64,
+    /// Gₛ, Pa.
+    pub shear_modulus: f64,
+    /// Eₙ*, Pa·s.
+    pub normal_viscosity: f64,
+    /// Gₛ*, Pa·s.
+    pub shear_viscosity: f64,
+    /// Band thickness h, m.
+    pub band: f64,
+    /// Friction angle φ, degrees.
+    pub friction_angle: f64,
+    /// Cohesion c, Pa.
+    pub cohesion: f64,
+    /// Tensile strength fₜ, Pa.
+    pub tensile_strength: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Support {
+    Free,
+    Fixed,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BlockKind {
+    Deformable,
+    Rigid,
+}
+
+/// A block: a simple counter-clockwise polygon of one material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Block {
+    pub name: String,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Counter-clockwise vertices, m.
+    pub vertices: Vec<[f64; 2]>,
+    pub support: Support,
+    pub kind: BlockKind,
+    /// Target triangle edge length for interior refinement, m (`None`: corners and contact nodes only).
+    pub mesh_size: Option<f64>,
+    /// Prescribed translation of a fixed block (m), applied after gravity (a settlement or
+    /// a fault offset).
+    pub prescribed: Option<[f64; 2]>,
+    /// Line of the block's table (or of its `[[generate]]` entry) in the scene file.
+    pub line: Option<usize>,
+}
+
+/// `[contacts]`: how contacts are found between touching blocks.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Contacts {
+    /// Index into [`Scene::joints`] of the joint used by every contact.
+    pub joint: usize,
+    /// Edges closer than this touch, m.
+    pub tolerance: f64,
+}
+
+/// `[[load]]`: a force on a block, N (resultant).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Load {
+    /// Index into [`Scene::blocks`].
+    pub block: usize,
+    /// Resultant force, N.
+    pub force: [f64; 2],
+    /// `None`: spread over the block like a body force; `Some(segment)`: spread uniformly
+    /// along the part of the block's boundary lying on that segment.
+    pub along: Option<[[f64; 2]; 2]>,
+    pub line: Option<usize>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AnalysisType {
+    Static,
+    Capacity,
+    Dynamic,
+}
+
+/// `[analysis]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Analysis {
+    pub kind: AnalysisType,
+    /// Static: horizontal body force as a fraction of the weight, applied after gravity.
+    pub lateral: f64,
+    /// Number of load increments.
+    pub load_steps: usize,
+    /// Capacity: +1 or −1 (direction of the lateral body force).
+    pub direction: f64,
+    /// Dynamic: time step and duration, s.
+    pub dt: Option<f64>,
+    pub duration: Option<f64>,
+    /// The `[analysis]` keys not interpreted by the foundation (ground motion, strategies);
+    /// kept verbatim for the drivers that read them.
+    pub extra: toml::Table,
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Output {
+    /// Blocks written to history.csv (empty: every free block).
+    pub track: Vec<String>,
+    /// Write ParaView files (default true).
+    pub vtk: bool,
+}
+
+/// A validated scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    pub title: String,
+    pub model: Model,
+    pub materials: Vec<Material>,
+    pub joints: Vec<Joint>,
+    pub blocks: Vec<Block>,
+    pub contacts: Contacts,
+    pub loads: Vec<Load>,
+    pub analysis: Analysis,
+    pub output: Output,
+    /// Where the scene came from (for error messages); `None` for built-in text.
+    pub file: Option<std::path::PathBuf>,
+    /// Warnings found while reading (clockwise polygons reversed, ...), one line each.
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    pub fn block_index(&self, name: &str) -> Option<usize> {
+        self.blocks.iter().position(|b| b.name == name)
+    }
+}

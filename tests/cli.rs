@@ -1,0 +1,133 @@
+//! The command line as INTERFACE.md describes it: run, check, example, export-matrix.
+
+mod common;
+use std::process::Command;
+
+fn dfem(args: &[&str]) -> std::process::Output {
+    Command::new(common::dfem_bin())
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn example_list_names_first() {
+    let out = dfem(&["example", "--list"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let names: Vec<&str> = text
+        .lines()
+        .map(|l| l.split_whitespace().next().unwrap())
+        .collect();
+    for n in ["incline", "wall", "arch", "tower", "slope", "tunnel"] {
+        assert!(names.contains(&n), "{n} missing from {names:?}");
+    }
+}
+
+#[test]
+fn run_writes_the_summary_of_interface_md() {
+    let dir = common::tmp_dir("cli_run_wall");
+    let out = dfem(&[
+        "run",
+        "--example",
+        "wall",
+        "--quiet",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(v["status"], "stable");
+    assert!(v["load_factor"].is_null());
+    assert!(v["failure"].is_null());
+    let blocks = v["blocks"].as_array().unwrap();
+    assert!(!blocks.is_empty());
+    for b in blocks {
+        assert!(b["name"].is_string());
+        assert_eq!(b["displacement"].as_array().unwrap().len(), 2);
+        assert!(b["rotation"].is_number());
+        // under gravity every block of a wall on its base goes down
+        assert!(b["displacement"][1].as_f64().unwrap() < 0.0);
+    }
+    for k in [
+        "dofs",
+        "contacts",
+        "iterations",
+        "factorizations",
+        "wall_time_s",
+    ] {
+        assert!(v["stats"][k].is_number(), "stats.{k}");
+    }
+    for f in ["results.pvd", "blocks_0000.vtu", "contacts_0000.vtu"] {
+        assert!(dir.join(f).metadata().unwrap().len() > 100, "{f}");
+    }
+    // no temporary files left behind
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let n = e.unwrap().file_name().into_string().unwrap();
+        assert!(!n.contains(".tmp"), "{n}");
+    }
+}
+
+#[test]
+fn check_prints_counts_of_a_file() {
+    let dir = common::tmp_dir("cli_check");
+    let f = dir.join("arch.toml");
+    assert!(dfem(&["example", "arch", "--out", f.to_str().unwrap()])
+        .status
+        .success());
+    let out = dfem(&["check", f.to_str().unwrap()]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    for k in ["blocks:", "nodes:", "triangles:", "contacts:", "dofs:"] {
+        assert!(text.contains(k), "{k} missing from {text}");
+    }
+    let dir2 = common::tmp_dir("cli_check_nothing_written");
+    assert_eq!(std::fs::read_dir(&dir2).unwrap().count(), 0);
+}
+
+#[test]
+fn export_matrix_writes_matrix_market() {
+    let dir = common::tmp_dir("cli_export");
+    let f = dir.join("wall.toml");
+    assert!(dfem(&["example", "wall", "--out", f.to_str().unwrap()])
+        .status
+        .success());
+    let mtx = dir.join("k.mtx");
+    let out = dfem(&["export-matrix", f.to_str().unwrap(), mtx.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&mtx).unwrap();
+    assert!(text.starts_with("%%MatrixMarket matrix coordinate real symmetric"));
+    let k = dfem_kernels::mm::read_matrix_market(&mtx).unwrap();
+    // symmetric positive diagonal
+    assert!(k.diagonal().iter().all(|&d| d > 0.0));
+    assert!(dir.join("k.rhs.mtx").exists());
+}
+
+#[test]
+fn unknown_solver_and_example_are_errors_not_panics() {
+    let dir = common::tmp_dir("cli_bad");
+    let out = dfem(&[
+        "run",
+        "--example",
+        "wall",
+        "--solver",
+        "nope",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let e = String::from_utf8(out.stderr).unwrap();
+    assert!(e.contains("--solver") && e.contains("faer-cholesky"), "{e}");
+    let out = dfem(&["run", "--example", "nope", "--out", dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8(out.stderr).unwrap().contains("wall"));
+}

@@ -1,0 +1,58 @@
+//! The same scene gives bit-identical results with `--threads 1` and `--threads 2`, and
+//! across repeated runs (INTERFACE.md: "Results do not depend on it").
+
+mod common;
+use std::process::Command;
+
+fn run(example: &str, threads: usize, tag: &str) -> std::path::PathBuf {
+    let dir = common::tmp_dir(&format!("det_{example}_{tag}"));
+    let st = Command::new(common::dfem_bin())
+        .args([
+            "run",
+            "--example",
+            example,
+            "--quiet",
+            "--threads",
+            &threads.to_string(),
+            "--out",
+        ])
+        .arg(&dir)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    dir
+}
+
+/// summary.json without the wall time, which is the one thing allowed to differ.
+fn summary(dir: &std::path::Path) -> serde_json::Value {
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    v["stats"]["wall_time_s"] = serde_json::Value::Null;
+    v
+}
+
+#[test]
+fn one_and_two_threads_give_the_same_bits() {
+    for example in ["wall", "arch", "tunnel"] {
+        let a = run(example, 1, "t1");
+        let b = run(example, 2, "t2");
+        let c = run(example, 2, "t2again");
+        assert_eq!(
+            summary(&a),
+            summary(&b),
+            "{example}: summary differs between 1 and 2 threads"
+        );
+        assert_eq!(
+            summary(&b),
+            summary(&c),
+            "{example}: summary differs between runs"
+        );
+        for f in ["blocks_0000.vtu", "contacts_0000.vtu", "results.pvd"] {
+            let (x, y) = (
+                std::fs::read(a.join(f)).unwrap(),
+                std::fs::read(b.join(f)).unwrap(),
+            );
+            assert!(x == y, "{example}: {f} differs between 1 and 2 threads");
+        }
+    }
+}

@@ -1,0 +1,87 @@
+//! Blocks under a horizontal coefficient (tilting table, pseudo-static; BENCHMARKS.md V2).
+//! A block of breadth b and height d on a fixed base, gravity plus a horizontal body force
+//! λ·g: it topples at λ = b/d and slides at λ = tan φ, whichever comes first. A column of
+//! equal stacked blocks: the same thresholds with d the column's height (it rocks about
+//! its toe; every joint carries the same ratio of shear to normal force, so all slide at
+//! tan φ). The capacity analysis must find λ within 1 % with the right mode.
+
+mod common;
+use dfem::analysis::Status;
+
+fn scene(b: f64, d: f64, n_blocks: usize, phi: f64, kind: &str) -> String {
+    let mut s = format!(
+        r#"
+[[material]]
+name = "stone"
+lame_lambda = 5e9
+lame_mu = 5e9
+unit_weight = 20e3
+[[joint]]
+name = "dry"
+normal_modulus = 20e9
+shear_modulus = 8e9
+band = 0.01
+friction_angle = {phi}
+[[block]]
+name = "base"
+material = "stone"
+support = "fixed"
+vertices = [[-1.0, -0.5], [{}, -0.5], [{}, 0.0], [-1.0, 0.0]]
+[analysis]
+type = "capacity"
+load_steps = 2
+"#,
+        b + 1.0,
+        b + 1.0
+    );
+    let h = d / n_blocks as f64;
+    for k in 0..n_blocks {
+        let (y0, y1) = (k as f64 * h, (k + 1) as f64 * h);
+        s += &format!("[[block]]\nname = \"k{k}\"\nmaterial = \"stone\"\nkind = \"{kind}\"\nvertices = [[0.0, {y0}], [{b}, {y0}], [{b}, {y1}], [0.0, {y1}]]\n");
+    }
+    s
+}
+
+fn capacity(b: f64, d: f64, n: usize, phi: f64, kind: &str) -> (f64, String) {
+    let sc = common::scene(&scene(b, d, n, phi, kind));
+    let (_, out) = common::solve(&sc);
+    assert!(matches!(out.status, Status::Failed { .. }));
+    (out.load_factor.unwrap(), out.mechanism.unwrap().mode)
+}
+
+fn check(b: f64, d: f64, n: usize, phi: f64, kind: &str) {
+    let (lam, mode) = capacity(b, d, n, phi, kind);
+    let (topple, slide) = (b / d, phi.to_radians().tan());
+    let (exact, exp_mode) = if topple < slide {
+        (topple, "toppling")
+    } else {
+        (slide, "sliding")
+    };
+    let err = common::rel_err(lam, exact);
+    eprintln!("{kind} b={b} d={d} n={n} φ={phi}: λ = {lam:.5} ({mode}), expected {exact:.5} ({exp_mode}), error {:.3} %", 100.0 * err);
+    assert!(err < 0.01, "λ = {lam}, expected {exact}");
+    assert_eq!(mode, exp_mode);
+}
+
+#[test]
+fn slender_block_topples_at_b_over_d() {
+    check(0.5, 2.0, 1, 40.0, "rigid");
+    check(0.5, 2.0, 1, 40.0, "deformable");
+}
+
+#[test]
+fn squat_block_slides_at_tan_phi() {
+    check(2.0, 1.0, 1, 25.0, "rigid");
+    check(2.0, 1.0, 1, 25.0, "deformable");
+}
+
+#[test]
+fn column_of_blocks_rocks_about_its_toe() {
+    check(0.6, 3.0, 4, 40.0, "rigid");
+    check(0.6, 3.0, 4, 40.0, "deformable");
+}
+
+#[test]
+fn column_of_blocks_slides_at_tan_phi() {
+    check(1.5, 2.0, 3, 20.0, "rigid");
+}

@@ -342,6 +342,7 @@ impl<'a> Driver<'a> {
         let scale = Self::norm(f_ext).max(1e-300);
         let size = self.model_size();
         let mut prev_state = trial.state.clone();
+        let mut prev_force = trial.force.clone();
         let mut singular_streak = 0;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
@@ -363,10 +364,25 @@ impl<'a> Driver<'a> {
                         .count()
                 );
             }
-            if it > 0 && rn <= self.settings.tolerance * scale && trial.state == prev_state {
+            // a state change counts only where the contact carries a force that matters at
+            // the tolerance: contacts with no force (head joints under gravity) flip with
+            // round-off
+            let negligible = self.settings.tolerance * scale;
+            let changed = trial
+                .state
+                .iter()
+                .zip(&prev_state)
+                .enumerate()
+                .any(|(k, (a, b))| {
+                    a != b
+                        && (trial.force[k][0].hypot(trial.force[k][1]) > negligible
+                            || prev_force[k][0].hypot(prev_force[k][1]) > negligible)
+                });
+            if it > 0 && rn <= self.settings.tolerance * scale && !changed {
                 return Ok(Ok(trial));
             }
             prev_state = trial.state.clone();
+            prev_force = trial.force.clone();
             let delta = match self.correction(&trial, &r)? {
                 Some(d) => {
                     singular_streak = 0;

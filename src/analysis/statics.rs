@@ -293,7 +293,11 @@ impl<'a> Driver<'a> {
                     && (newton || backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO)
                     && backend.solve(&mut x).is_ok()
                     && x.iter().all(|v| v.is_finite());
-                Ok(ok.then_some(x))
+                // LU has no pivot measure: a matrix singular up to round-off shows as a
+                // step of the size of the model
+                let size = self.model_size();
+                let huge = newton && x.iter().any(|v| v.abs() > 0.1 * size);
+                Ok((ok && !huge).then_some(x))
             }
         }
     }
@@ -410,28 +414,33 @@ impl<'a> Driver<'a> {
                 }
             };
             // line search on the out-of-balance norm
-            let mut alpha = 1.0;
-            let mut best: Option<(f64, Trial, Vec<f64>)> = None;
-            for _ in 0..if self.settings.line_search { 4 } else { 1 } {
-                let cand: Vec<f64> = dq.iter().zip(&delta).map(|(a, b)| a + alpha * b).collect();
-                let t = self.trial(&cand, presc);
-                let rn2 = Self::norm(
-                    &f_ext
-                        .iter()
-                        .zip(&t.f_int)
-                        .map(|(a, b)| a - b)
-                        .collect::<Vec<_>>(),
-                );
-                let better = best.as_ref().is_none_or(|b| rn2 < b.0);
-                if better {
-                    best = Some((rn2, t, cand));
+            let mut best = self.line_search(&dq, &delta, rn, f_ext, presc);
+            if self.settings.strategy == Strategy::Newton && best.0 >= rn {
+                // safeguarded Newton: where the tangent step does not reduce the
+                // out-of-balance force (slip/open cycling at a lightly loaded contact),
+                // take the secant step instead
+                let local = self.local_stiffness(&trial, false);
+                self.system
+                    .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+                let mut x = r.clone();
+                let ok = self.backend.factorize(&self.kbuf).is_ok()
+                    && self.backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO
+                    && self.backend.solve(&mut x).is_ok()
+                    && x.iter().all(|v| v.is_finite());
+                self.k0_factored = false;
+                let x = if ok {
+                    Some(x)
+                } else {
+                    self.blended_step(&trial, &r, BLEND)?
+                };
+                if let Some(x) = x {
+                    let alt = self.line_search(&dq, &x, rn, f_ext, presc);
+                    if alt.0 < best.0 {
+                        best = alt;
+                    }
                 }
-                if rn2 <= rn {
-                    break;
-                }
-                alpha *= 0.5;
             }
-            let (_, t, cand) = best.unwrap();
+            let (_, t, cand) = best;
             trial = t;
             dq = cand;
             let dmax = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -479,6 +488,39 @@ impl<'a> Driver<'a> {
             forces: trial.force.clone(),
             loads,
         }
+    }
+
+    /// Backtracking on the out-of-balance norm along `delta` from `dq`: the best of the
+    /// tried steps (norm, trial, increment).
+    fn line_search(
+        &self,
+        dq: &[f64],
+        delta: &[f64],
+        rn: f64,
+        f_ext: &[f64],
+        presc: &[Point],
+    ) -> (f64, Trial, Vec<f64>) {
+        let mut alpha = 1.0;
+        let mut best: Option<(f64, Trial, Vec<f64>)> = None;
+        for _ in 0..if self.settings.line_search { 4 } else { 1 } {
+            let cand: Vec<f64> = dq.iter().zip(delta).map(|(a, b)| a + alpha * b).collect();
+            let t = self.trial(&cand, presc);
+            let rn2 = Self::norm(
+                &f_ext
+                    .iter()
+                    .zip(&t.f_int)
+                    .map(|(a, b)| a - b)
+                    .collect::<Vec<_>>(),
+            );
+            if best.as_ref().is_none_or(|b| rn2 < b.0) {
+                best = Some((rn2, t, cand));
+            }
+            if rn2 <= rn {
+                break;
+            }
+            alpha *= 0.5;
+        }
+        best.expect("at least one step is tried")
     }
 
     fn model_size(&self) -> f64 {

@@ -172,6 +172,8 @@ thickness = 0.4
 voussoirs = 13
 pier_height = 2.0
 pier_courses = 4
+# piers 1 m wide: with 0.4 m piers 2 m tall the thrust overturns them under self-weight
+pier_width = 1.0
 
 [contacts]
 joint = "masonry-joint"

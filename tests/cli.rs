@@ -3,6 +3,34 @@
 mod common;
 use std::process::Command;
 
+/// A material, a joint and a fixed base block, for the scenes written here.
+const BASE: &str = r#"
+[[material]]
+name = "stone"
+lame_lambda = 1e9
+lame_mu = 1e9
+unit_weight = 2e4
+[[joint]]
+name = "j"
+normal_modulus = 1e9
+shear_modulus = 1e8
+band = 0.01
+friction_angle = 30.0
+[[block]]
+name = "base"
+material = "stone"
+support = "fixed"
+vertices = [[0.0, -1.0], [4.0, -1.0], [4.0, 0.0], [0.0, 0.0]]
+"#;
+
+/// Write BASE plus `blocks` into a fresh directory; returns the directory and the file.
+fn write_scene(dir: &str, file: &str, blocks: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = common::tmp_dir(dir);
+    let scene = dir.join(file);
+    std::fs::write(&scene, format!("{BASE}{blocks}")).unwrap();
+    (dir, scene)
+}
+
 fn dfem(args: &[&str]) -> std::process::Output {
     Command::new(common::dfem_bin())
         .args(args)
@@ -130,4 +158,95 @@ fn unknown_solver_and_example_are_errors_not_panics() {
     let out = dfem(&["run", "--example", "nope", "--out", dir.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8(out.stderr).unwrap().contains("wall"));
+}
+
+#[test]
+fn a_group_of_blocks_without_support_is_a_failed_result() {
+    let (dir, scene) = write_scene(
+        "cli_floating",
+        "floating.toml",
+        r#"
+[[block]]
+name = "on_base"
+material = "stone"
+vertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+[[block]]
+name = "lower"
+material = "stone"
+vertices = [[10.0, 5.0], [11.0, 5.0], [11.0, 6.0], [10.0, 6.0]]
+[[block]]
+name = "upper"
+material = "stone"
+kind = "rigid"
+vertices = [[10.0, 6.0], [11.0, 6.0], [11.0, 7.0], [10.0, 7.0]]
+"#,
+    );
+    let out = dfem(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["status"], "failed");
+    assert!(
+        v["message"].as_str().unwrap().contains("lower, upper"),
+        "{}",
+        v["message"]
+    );
+    let motions: Vec<(String, String)> = v["failure"]["blocks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| {
+            (
+                b["name"].as_str().unwrap().to_string(),
+                b["motion"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect();
+    assert!(
+        motions.contains(&("lower".into(), "falling".into()))
+            && motions.contains(&("on_base".into(), "none".into())),
+        "{motions:?}"
+    );
+}
+
+#[test]
+fn clockwise_blocks_are_reversed_with_a_warning() {
+    let (dir, scene) = write_scene(
+        "cli_clockwise",
+        "cw.toml",
+        r#"
+[[block]]
+name = "cw"
+material = "stone"
+vertices = [[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]]
+"#,
+    );
+    let out = dfem(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.contains("warning:") && err.contains("block 'cw'") && err.contains("clockwise"),
+        "{err}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["status"], "stable");
+    assert_eq!(v["warnings"].as_array().unwrap().len(), 1);
 }

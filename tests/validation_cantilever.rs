@@ -112,7 +112,7 @@ fn rigid_cantilever_matches_spring_chain() {
         .sum::<f64>()
         + 10.0 * P / k_s;
     // tip point (L, H/2) of the last rigid block: v_c + θ (L − x_c)
-    let (d, rot) = dfem::analysis::block_motion(&m, 10, &out.u);
+    let (d, rot) = dfem::analysis::outcome_motion(&m, 10, &out);
     let delta = -(d[1] + rot * (L - (L - l / 2.0)));
     let err = rel_err(delta, exact);
     eprintln!("rigid chain tip {delta:.9e} m, closed form {exact:.9e} m");

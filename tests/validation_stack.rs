@@ -83,7 +83,7 @@ fn check(kind: &str, tol: f64) {
     let (m, out) = common::solve(&sc);
     assert_eq!(out.status, Status::Stable);
     for k in 0..N {
-        let (d, _) = dfem::analysis::block_motion(&m, k + 1, &out.u);
+        let (d, _) = dfem::analysis::outcome_motion(&m, k + 1, &out);
         let exact = settlement(k, kind == "rigid");
         let err = common::rel_err(-d[1], exact);
         eprintln!(

@@ -24,6 +24,8 @@ pub enum Motion {
     Sliding,
     Toppling,
     SlidingToppling,
+    /// No chain of contacts holds the block (an extension of INTERFACE.md's values).
+    Falling,
 }
 
 impl Motion {
@@ -33,6 +35,7 @@ impl Motion {
             Motion::Sliding => "sliding",
             Motion::Toppling => "toppling",
             Motion::SlidingToppling => "sliding+toppling",
+            Motion::Falling => "falling",
         }
     }
 }

@@ -5,13 +5,12 @@ pub mod mechanism;
 pub mod statics;
 pub mod support;
 
-use crate::assembly::{contact_gradient, cst_b, loads, System};
+use crate::assembly::{cst_b, loads};
 use crate::material::{block_elastic, ContactLaw, ContactSprings, ContactState, ElasticBand};
 use crate::mesh::Mesh;
 use crate::scene::{AnalysisType, Scene};
 use crate::solve::LinearBackend;
 use crate::{Error, Result};
-use std::time::Instant;
 
 /// Whether the structure stands.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,35 +58,6 @@ pub struct Outcome {
     pub current: Option<Mesh>,
 }
 
-impl Outcome {
-    /// An outcome of a linear solve with unknowns `u`.
-    pub fn linear(
-        scene: &Scene,
-        mesh: &Mesh,
-        status: Status,
-        u: Vec<f64>,
-        forces: Vec<[f64; 2]>,
-        stats: Stats,
-    ) -> Outcome {
-        let node_disp = (0..mesh.nodes.len() as u32)
-            .map(|n| mesh.node_displacement(n, &u))
-            .collect();
-        let stress = triangle_stresses(scene, mesh, &u);
-        Outcome {
-            status,
-            node_disp,
-            stress,
-            contact_states: vec![ContactState::Stick; mesh.contacts.len()],
-            contact_forces: forces,
-            u,
-            stats,
-            load_factor: None,
-            mechanism: None,
-            current: None,
-        }
-    }
-}
-
 /// Pivot ratio below which the factorization is taken as singular: a mechanism (METHOD.md
 /// §4, "the global stiffness matrix becomes ill-conditioned"). Round-off on a singular
 /// matrix leaves ratios near 1e-16 times the condition of the rest; stiff joints on soft
@@ -97,18 +67,28 @@ pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 /// Run the scene's analysis.
 pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Result<Outcome> {
     if scene.analysis.kind != AnalysisType::Dynamic {
-        let floating = support::unsupported_blocks(mesh);
-        if let Some(&b) = floating.first() {
-            let names: Vec<&str> = floating
+        // a free block that touches nothing at all is a modelling mistake (misplaced
+        // coordinates, a tolerance too small), not a structure
+        let isolated: Vec<usize> = (0..mesh.blocks.len())
+            .filter(|&b| mesh.blocks[b].dofs != crate::mesh::BlockDofs::Fixed)
+            .filter(|&b| {
+                !mesh
+                    .contacts
+                    .iter()
+                    .any(|c| c.block_l as usize == b || c.block_m as usize == b)
+            })
+            .collect();
+        if let Some(&b) = isolated.first() {
+            let names: Vec<&str> = isolated
                 .iter()
                 .take(5)
                 .map(|&i| scene.blocks[i].name.as_str())
                 .collect();
             return Err(Error::new(format!(
-                "{} free block(s) have no path of contacts to a fixed block ({}{}), so a static analysis has nothing to hold them",
-                floating.len(),
+                "{} free block(s) touch no other block ({}{}), so a static analysis has nothing to hold them",
+                isolated.len(),
                 names.join(", "),
-                if floating.len() > 5 { ", ..." } else { "" }
+                if isolated.len() > 5 { ", ..." } else { "" }
             ))
             .line(scene.blocks[b].line)
             .place(format!("block '{}'", scene.blocks[b].name))
@@ -148,120 +128,6 @@ pub fn external_load(scene: &Scene, mesh: &Mesh) -> Vec<f64> {
         *a += b;
     }
     f
-}
-
-/// Linear elastic static solve K u = f with elastic contacts that carry tension: the
-/// reference for solver comparisons and `export-matrix` (the `static` analysis itself is
-/// the nonlinear driver of [`statics`]).
-pub fn linear_static(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Outcome {
-    let start = Instant::now();
-    let mut stats = Stats {
-        dofs: mesh.n_dofs,
-        contacts: mesh.contacts.len(),
-        triangles: mesh.triangles.len(),
-        ..Default::default()
-    };
-    let springs = elastic_springs(scene, mesh);
-    let failed = |reason: String, blocks: Vec<usize>, stats: Stats| {
-        Outcome::linear(
-            scene,
-            mesh,
-            Status::Failed { reason, blocks },
-            vec![0.0; mesh.n_dofs],
-            vec![[0.0; 2]; mesh.contacts.len()],
-            stats,
-        )
-    };
-    let floating = support::unsupported_blocks(mesh);
-    if !floating.is_empty() {
-        stats.wall_time_s = start.elapsed().as_secs_f64();
-        let names: Vec<&str> = floating
-            .iter()
-            .take(5)
-            .map(|&b| scene.blocks[b].name.as_str())
-            .collect();
-        return failed(
-            format!(
-                "{} block(s) have no path of contacts to a fixed block: {}{}",
-                floating.len(),
-                names.join(", "),
-                if floating.len() > 5 { ", ..." } else { "" }
-            ),
-            floating,
-            stats,
-        );
-    }
-    if mesh.n_dofs == 0 {
-        stats.wall_time_s = start.elapsed().as_secs_f64();
-        return Outcome::linear(
-            scene,
-            mesh,
-            Status::Stable,
-            vec![],
-            vec![[0.0; 2]; mesh.contacts.len()],
-            stats,
-        );
-    }
-    let system = System::new(scene, mesh);
-    let k = system.stiffness(mesh, &springs);
-    let mut u = external_load(scene, mesh);
-    stats.increments = 1;
-    stats.iterations = 1;
-    let result = backend.factorize(&k).and_then(|_| backend.solve(&mut u));
-    let s = backend.stats();
-    stats.factorizations = s.numeric_factorizations;
-    stats.symbolic_factorizations = s.symbolic_factorizations;
-    stats.min_pivot_ratio = s.min_pivot_ratio;
-    stats.wall_time_s = start.elapsed().as_secs_f64();
-    if let Err(e) = result {
-        return failed(
-            format!("the stiffness matrix is singular ({e}): part of the structure is a mechanism"),
-            vec![],
-            stats,
-        );
-    }
-    if s.min_pivot_ratio < SINGULAR_PIVOT_RATIO || u.iter().any(|x| !x.is_finite()) {
-        return failed(format!("the stiffness matrix is singular (pivot ratio {:.1e}): part of the structure is a mechanism", s.min_pivot_ratio), vec![], stats);
-    }
-    let (contact_forces, _) = contact_forces(scene, mesh, &springs, &u);
-    Outcome::linear(scene, mesh, Status::Stable, u, contact_forces, stats)
-}
-
-/// Relative displacement (δₙ, δₛ) (m) of a contact (METHOD.md §3: δ = u_m − u_l).
-pub fn contact_opening(mesh: &Mesh, c: usize, u: &[f64]) -> (f64, f64) {
-    let con = &mesh.contacts[c];
-    let (ml, mm) = (mesh.node_map(con.node_l), mesh.node_map(con.node_m));
-    let n = con.normal;
-    let gn = contact_gradient(&ml, &mm, n);
-    let gs = contact_gradient(&ml, &mm, [-n[1], n[0]]);
-    let mut q = [0.0; 6];
-    for k in 0..3 {
-        for (slot, m) in [(k, &ml), (3 + k, &mm)] {
-            let d = m.dofs[k];
-            if d != dfem_kernels::CONSTRAINED {
-                q[slot] = u[d as usize];
-            }
-        }
-    }
-    let dot = |g: &[f64; 6]| g.iter().zip(&q).map(|(a, b)| a * b).sum::<f64>();
-    (dot(&gn), dot(&gs))
-}
-
-/// Forces (N) and states of all contacts for springs and unknowns.
-pub fn contact_forces(
-    scene: &Scene,
-    mesh: &Mesh,
-    springs: &[ContactSprings],
-    u: &[f64],
-) -> (Vec<[f64; 2]>, Vec<ContactState>) {
-    let _ = scene;
-    let f = (0..mesh.contacts.len())
-        .map(|c| {
-            let (dn, ds) = contact_opening(mesh, c, u);
-            [springs[c].kn * dn, springs[c].ks * ds]
-        })
-        .collect();
-    (f, vec![ContactState::Stick; mesh.contacts.len()])
 }
 
 /// Stress (σxx, σyy, σxy) (Pa) of every triangle: σ = Dₑ B uₑ.

@@ -667,6 +667,48 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
         )
     };
 
+    // groups of blocks with no chain of contacts down to a fixed block fall: a result
+    let floating = super::support::unsupported_blocks(mesh);
+    if !floating.is_empty() {
+        let names: Vec<&str> = floating
+            .iter()
+            .take(5)
+            .map(|&b| scene.blocks[b].name.as_str())
+            .collect();
+        let reason = format!(
+            "{} block(s) have no path of contacts to a fixed block and fall: {}{}",
+            floating.len(),
+            names.join(", "),
+            if floating.len() > 5 { ", ..." } else { "" }
+        );
+        let blocks = (0..mesh.blocks.len())
+            .filter(|&b| mesh.blocks[b].dofs != crate::mesh::BlockDofs::Fixed)
+            .map(|b| {
+                (
+                    b,
+                    if floating.contains(&b) {
+                        super::mechanism::Motion::Falling
+                    } else {
+                        super::mechanism::Motion::None
+                    },
+                )
+            })
+            .collect();
+        let mech = Mechanism {
+            blocks,
+            mode: "mixed".into(),
+        };
+        return Ok(finish(
+            &mut d,
+            Status::Failed {
+                reason,
+                blocks: floating,
+            },
+            None,
+            Some(mech),
+        ));
+    }
+
     // phase 1: gravity and loads
     let f_grav = d.external(g, true);
     let phase = Phase {

@@ -342,6 +342,26 @@ impl<'a> Driver<'a> {
     ) -> Result<std::result::Result<Trial, (IncrementFailure, Failure)>> {
         let n = self.cur.n_dofs;
         let mut dq = vec![0.0; n];
+        if presc.iter().any(|p| *p != [0.0, 0.0]) {
+            // elastic predictor of a prescribed motion: the free blocks' elastic response to
+            // it, so that the iterations start near the answer rather than from the
+            // friction limit of slipping contacts
+            let elastic = crate::material::ElasticBand { ..self.law.elastic };
+            let t = evaluate(
+                &self.system,
+                &self.cur,
+                &self.committed,
+                &elastic,
+                &self.area,
+                self.scene.model.thickness,
+                &dq,
+                presc,
+            );
+            let mut x: Vec<f64> = f_ext.iter().zip(&t.f_int).map(|(a, b)| a - b).collect();
+            if self.solve_k0(&mut x)? {
+                dq = x;
+            }
+        }
         let mut trial = self.trial(&dq, presc);
         let scale = Self::norm(f_ext).max(1e-300);
         let size = self.model_size();

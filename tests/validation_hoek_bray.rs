@@ -111,6 +111,31 @@ fn sweep(kind: &str) -> Vec<(f64, f64, &'static str, String)> {
 
 fn check(kind: &str) {
     let res = sweep(kind);
+    // the sweep as a figure (the seed's Fig. 3); DFEM_WRITE_FIGURES=1 also writes it to
+    // docs/figures/
+    let pts: Vec<dfem::output::plot::ModePoint> = res
+        .iter()
+        .map(|r| dfem::output::plot::ModePoint {
+            alpha: r.0,
+            ratio: r.1,
+            mode: r.3.clone(),
+        })
+        .collect();
+    let mut dirs = vec![common::tmp_dir(&format!("hoek_bray_{kind}"))];
+    if std::env::var_os("DFEM_WRITE_FIGURES").is_some() {
+        dirs.push(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/figures"));
+    }
+    for dir in dirs {
+        for ext in ["svg", "png"] {
+            let f = dir.join(format!("hoek_bray_{kind}.{ext}"));
+            dfem::output::plot::hoek_bray_chart(&f, PHI, &pts).unwrap();
+            assert!(
+                std::fs::metadata(&f).unwrap().len() > 10_000,
+                "{} is too small",
+                f.display()
+            );
+        }
+    }
     let wrong: Vec<_> = res.iter().filter(|r| r.2 != r.3).collect();
     let counts = ["stable", "sliding", "toppling", "sliding+toppling"]
         .map(|m| res.iter().filter(|r| r.2 == m).count());

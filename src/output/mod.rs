@@ -2,6 +2,7 @@
 //! written to a temporary name in the same directory and renamed, so a reader never sees
 //! a half-written result.
 
+pub mod plot;
 pub mod vtk;
 
 use crate::analysis::{outcome_motion, Outcome, Status};

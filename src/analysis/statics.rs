@@ -803,13 +803,22 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
             let mut last_fail: Option<String> = None;
             let mut upper = f64::INFINITY;
             let limit = 1e3;
+            // Raise λ in increments; an increment that fails sets the upper bound and is
+            // cut. A failure from a distant state is not proof of collapse (the path of
+            // slips matters), so the upper bound is retried from the closer states and
+            // dropped when reached. Stops when the bracket [λ, upper] is narrow enough.
             loop {
-                if step <= d.settings.bracket * lambda.max(d.settings.initial_step * 1e-3)
-                    || lambda > limit
-                {
+                let narrow = upper.is_finite()
+                    && upper - lambda
+                        <= d.settings.bracket * lambda.max(d.settings.initial_step * 1e-3);
+                if narrow || step <= 1e-12 * d.settings.initial_step || lambda > limit {
                     break;
                 }
-                let target = lambda + step;
+                let target = if upper.is_finite() {
+                    (lambda + step).min(upper)
+                } else {
+                    lambda + step
+                };
                 let f: Vec<f64> = f_base
                     .iter()
                     .zip(&f_lat)
@@ -820,19 +829,19 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
                         let dq = trial.dq.clone();
                         d.commit(trial, &dq, &zero_presc);
                         lambda = target;
+                        if lambda >= upper {
+                            // the earlier failure was the path, not the structure
+                            upper = f64::INFINITY;
+                        }
                         if upper.is_infinite() {
                             step *= 1.5;
-                        }
-                        step = step.min(0.5 * (upper - lambda)).max(0.0);
-                        if upper.is_finite() && step <= 0.0 {
-                            break;
                         }
                     }
                     Err((why, dq)) => {
                         d.failure_mode = Some(dq);
                         upper = upper.min(target);
                         last_fail = Some(describe(&why));
-                        step *= 0.5;
+                        step = 0.5 * (target - lambda);
                     }
                 }
             }

@@ -6,15 +6,14 @@
 //! the states say nothing (all stick), the kinematics decide: translation with little
 //! rotation is sliding, rotation toppling.
 
-use crate::material::{ContactState, MohrCoulomb as Joint};
+use crate::material::{ContactState, MohrCoulomb};
 
 /// The strength data the pivot check needs.
-struct MohrCoulomb {
+struct PivotStrength {
     tan_phi: f64,
     cohesion: f64,
     thickness: f64,
 }
-type PivotLaw = MohrCoulomb;
 use crate::mesh::{BlockDofs, Mesh};
 use crate::scene::Scene;
 
@@ -110,7 +109,7 @@ fn pivot_slips(
     loads: &[[f64; 2]],
     forces: &[[f64; 2]],
     states: &[ContactState],
-    law: &MohrCoulomb,
+    law: &PivotStrength,
 ) -> Option<bool> {
     let mut r = loads[b];
     let (mut n_sum, mut area) = ([0.0, 0.0], 0.0);
@@ -161,13 +160,13 @@ pub fn classify(
     forces: &[[f64; 2]],
     loads: &[[f64; 2]],
 ) -> Mechanism {
-    let law = Joint::from_joint(
+    let law = MohrCoulomb::from_joint(
         &scene.joints[scene
             .contacts
             .joint
             .min(scene.joints.len().saturating_sub(1))],
     );
-    let law = &PivotLaw {
+    let law = &PivotStrength {
         tan_phi: law.tan_phi,
         cohesion: law.cohesion,
         thickness: scene.model.thickness,
@@ -264,6 +263,5 @@ pub fn classify(
     } else {
         "mixed".to_string()
     };
-    let _ = scene;
     Mechanism { blocks, mode }
 }

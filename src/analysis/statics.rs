@@ -13,7 +13,7 @@ use crate::assembly::{loads, LocalStiffness, System};
 use crate::geometry::polygon::Point;
 use crate::material::{ContactLaw, ContactState, MohrCoulomb};
 use crate::mesh::Mesh;
-use crate::scene::{AnalysisType, Scene, Support};
+use crate::scene::{AnalysisType, Scene};
 use crate::solve::LinearBackend;
 use crate::{Error, Result};
 use dfem_kernels::CsrMatrix;
@@ -142,7 +142,6 @@ pub struct Driver<'a> {
     area: Vec<f64>,
     cur: Mesh,
     committed: Committed,
-    k0: Option<CsrMatrix>,
     kbuf: CsrMatrix,
     pub stats: Stats,
     backend: &'a mut dyn LinearBackend,
@@ -197,7 +196,6 @@ impl<'a> Driver<'a> {
             area,
             cur: mesh.clone(),
             committed: Committed::zero(mesh),
-            k0: None,
             kbuf,
             stats: Stats {
                 dofs: mesh.n_dofs,
@@ -259,7 +257,6 @@ impl<'a> Driver<'a> {
             self.system.stiffness_into(&self.cur, &local, &mut k);
             let ok = self.backend.factorize(&k).is_ok()
                 && self.backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO;
-            self.k0 = Some(k);
             self.k0_factored = true;
             if !ok {
                 return Ok(false);
@@ -861,9 +858,4 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
         }
         AnalysisType::Dynamic => unreachable!("the dynamic driver runs elsewhere"),
     }
-}
-
-/// Whether any block is fixed (a static analysis needs one).
-pub fn has_support(scene: &Scene) -> bool {
-    scene.blocks.iter().any(|b| b.support == Support::Fixed)
 }

@@ -33,6 +33,11 @@ pub struct Stats {
     pub iterations: usize,
     pub factorizations: usize,
     pub symbolic_factorizations: usize,
+    /// Secant corrections solved with an earlier factorization as preconditioner instead
+    /// of a refactorization (few contacts changed state).
+    pub reused_factorizations: usize,
+    /// Conjugate-gradient iterations of those corrections.
+    pub reuse_iterations: usize,
     pub wall_time_s: f64,
     pub min_pivot_ratio: f64,
 }

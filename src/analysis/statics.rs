@@ -146,13 +146,39 @@ pub struct Driver<'a> {
     pub stats: Stats,
     backend: &'a mut dyn LinearBackend,
     lu: Option<Box<dyn LinearBackend>>,
-    k0_factored: bool,
+    /// What the main backend holds factorized.
+    held: Held,
     /// The last failing increment (unknowns) and the contact states of its last trial,
     /// for the mechanism.
     pub failure_mode: Option<Failure>,
     /// Prescribed translation applied so far, per block (m).
     presc_total: Vec<Point>,
 }
+
+/// The matrix whose factorization the main backend holds.
+#[derive(Debug, Clone, PartialEq)]
+enum Held {
+    Nothing,
+    /// The elastic stiffness of the initial configuration.
+    K0,
+    /// A secant stiffness, with the contact states it was assembled for.
+    Secant(Vec<ContactState>),
+}
+
+/// A secant correction reuses the held factorization as a preconditioner when at most this
+/// many contacts changed state since it was computed. Each changed contact is a rank-1 or
+/// rank-2 change of K, and conjugate gradients need about one iteration per unit of rank
+/// plus three for the change of geometry (measured on the 30×30 wall of
+/// docs/performance.md: 0 changes → 3 iterations, 5–9 → 6–10, 20–24 → 18–25), while one
+/// iteration (a solve pair and a product with K) costs a tenth to a twentieth of a numeric
+/// factorization on the walls of docs/performance.md.
+const REUSE_MAX_CHANGES: usize = 4;
+/// Conjugate-gradient iterations after which the reused factorization stops paying and the
+/// secant matrix is refactorized.
+const REUSE_MAX_ITERATIONS: usize = 8;
+/// Relative residual of a correction computed with a reused factorization: far below the
+/// out-of-balance tolerances (≥ 1e-8), so the iterations see no difference.
+const REUSE_TOLERANCE: f64 = 1e-10;
 
 /// The failing increment: its unknowns (the mode), the states and forces of its last
 /// trial, and the external force resultant on every block (N).
@@ -205,7 +231,7 @@ impl<'a> Driver<'a> {
             },
             backend,
             lu: None,
-            k0_factored: false,
+            held: Held::Nothing,
             failure_mode: None,
             presc_total: vec![[0.0; 2]; mesh.blocks.len()],
         })
@@ -251,13 +277,13 @@ impl<'a> Driver<'a> {
 
     /// Solve with the elastic stiffness of the initial configuration (factorized once).
     fn solve_k0(&mut self, rhs: &mut [f64]) -> Result<bool> {
-        if !self.k0_factored {
+        if self.held != Held::K0 {
             let local = self.elastic_local();
             let mut k = CsrMatrix::zeros(self.system.plan.pattern().clone());
             self.system.stiffness_into(&self.cur, &local, &mut k);
             let ok = self.backend.factorize(&k).is_ok()
                 && self.backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO;
-            self.k0_factored = true;
+            self.held = Held::K0;
             if !ok {
                 return Ok(false);
             }
@@ -276,8 +302,12 @@ impl<'a> Driver<'a> {
                 let local = self.local_stiffness(trial, newton);
                 self.system
                     .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
-                // the stiffness with the k0 backend is refactorized: k0 is not kept factored
-                self.k0_factored = false;
+                if !newton {
+                    if let Some(x) = self.reuse(trial, r) {
+                        return Ok(Some(x));
+                    }
+                    self.held = Held::Secant(trial.state.clone());
+                }
                 let backend: &mut dyn LinearBackend = if newton {
                     if self.lu.is_none() {
                         self.lu = Some(crate::solve::backend("faer-lu")?);
@@ -297,6 +327,33 @@ impl<'a> Driver<'a> {
                 Ok((ok && !huge).then_some(x))
             }
         }
+    }
+
+    /// The secant correction K_s⁻¹ r computed with the held secant factorization as a
+    /// preconditioner, when few contacts changed state since it was computed (`kbuf` holds
+    /// the new K_s). `None`: refactorize.
+    fn reuse(&mut self, trial: &Trial, r: &[f64]) -> Option<Vec<f64>> {
+        let Held::Secant(states) = &self.held else {
+            return None;
+        };
+        let changed = states
+            .iter()
+            .zip(&trial.state)
+            .filter(|(a, b)| a != b)
+            .count();
+        if changed > REUSE_MAX_CHANGES {
+            return None;
+        }
+        let out = crate::solve::reuse::solve_with_factor(
+            &self.kbuf,
+            &mut *self.backend,
+            r,
+            REUSE_TOLERANCE,
+            REUSE_MAX_ITERATIONS,
+        )?;
+        self.stats.reused_factorizations += 1;
+        self.stats.reuse_iterations += out.iterations;
+        Some(out.x)
     }
 
     /// The mechanism of a singular secant matrix K_s: the solution of (K_s + ε K₀) x = r,
@@ -319,7 +376,7 @@ impl<'a> Driver<'a> {
         for (a, b) in self.kbuf.values.iter_mut().zip(&k0.values) {
             *a += eps * b;
         }
-        self.k0_factored = false;
+        self.held = Held::Nothing;
         let mut x = r.to_vec();
         let ok = self.backend.factorize(&self.kbuf).is_ok()
             && self.backend.solve(&mut x).is_ok()
@@ -444,7 +501,7 @@ impl<'a> Driver<'a> {
                     && self.backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO
                     && self.backend.solve(&mut x).is_ok()
                     && x.iter().all(|v| v.is_finite());
-                self.k0_factored = false;
+                self.held = Held::Secant(trial.state.clone());
                 let x = if ok {
                     Some(x)
                 } else {

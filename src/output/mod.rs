@@ -83,6 +83,8 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "iterations": s.iterations,
             "factorizations": s.factorizations,
             "symbolic_factorizations": s.symbolic_factorizations,
+            "reused_factorizations": s.reused_factorizations,
+            "reuse_iterations": s.reuse_iterations,
             "min_pivot_ratio": s.min_pivot_ratio,
             "wall_time_s": s.wall_time_s,
         },

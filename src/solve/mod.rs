@@ -14,3 +14,4 @@ pub fn backend(name: &str) -> crate::Result<Box<dyn LinearBackend>> {
             .fix(format!("use one of: {}", BACKENDS.join(", ")))
     })
 }
+pub mod reuse;

@@ -86,10 +86,9 @@ fn column_of_blocks_slides_at_tan_phi() {
     check(1.5, 2.0, 3, 20.0, "rigid");
 }
 
-/// The iteration strategies find the same capacity and mode. Initial stiffness and secant
-/// agree to 1 %; Newton (nonsymmetric friction tangent) is conservative near toppling:
-/// its slip/open cycling at the unloading heel stops it about 5 % early on the slender
-/// block (a known weakness, measured here so that it cannot get worse unnoticed).
+/// The iteration strategies find the same capacity (within 1 % of the closed form) and
+/// the same mode. (Newton's tangent was once symmetrised by the assembly, which stopped
+/// it 5 % early on the slender block; the unsymmetric friction tangent reaches b/d.)
 #[test]
 fn strategies_agree() {
     for (b, d, phi) in [(0.5, 2.0, 40.0), (2.0, 1.0, 25.0)] {
@@ -107,17 +106,12 @@ fn strategies_agree() {
             res.push((lam, mode));
         }
         let exact = (b / d).min(phi.to_radians().tan());
-        for (lam, mode) in &res[..2] {
+        for (lam, mode) in &res {
             assert!(
                 common::rel_err(*lam, exact) < 0.01,
                 "λ = {lam}, expected {exact}"
             );
             assert_eq!(mode, &res[1].1);
         }
-        let newton = res[2].0;
-        assert!(
-            newton <= exact * 1.001 && common::rel_err(newton, exact) < 0.06,
-            "Newton λ = {newton}, expected {exact}"
-        );
     }
 }

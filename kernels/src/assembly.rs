@@ -306,15 +306,7 @@ impl AssemblyPlan {
     /// # Panics
     /// If `out` does not use this plan's pattern.
     pub fn assemble<F: Fn(usize, &mut [f64]) + Sync>(&self, kernel: F, out: &mut CsrMatrix) {
-        assert_eq!(
-            out.pattern.id(),
-            self.pattern.id(),
-            "the matrix does not use the plan's pattern"
-        );
-        let buf = fill_element_buffer(&self.mat_offset, &kernel);
-        let mut sums = vec![0.0; self.pattern.nnz()];
-        gather(&self.gather_ptr, &self.gather_pos, &buf, &mut sums);
-        drop(buf);
+        let sums = self.sums(&kernel, out);
         let t = &self.transpose;
         out.values
             .par_chunks_mut(ROW_CHUNK)
@@ -326,6 +318,33 @@ impl AssemblyPlan {
                     *v = 0.5 * (sums[k] + sums[t[k]]);
                 }
             });
+    }
+
+    /// Assembles a matrix whose element matrices are not symmetric (a tangent stiffness
+    /// with friction coupling, for an LU backend): like [`Self::assemble`], same pattern and
+    /// determinism, but entry (i, j) is exactly the sum into (i, j), not symmetrised.
+    ///
+    /// # Panics
+    /// If `out` does not use this plan's pattern.
+    pub fn assemble_unsymmetric<F: Fn(usize, &mut [f64]) + Sync>(
+        &self,
+        kernel: F,
+        out: &mut CsrMatrix,
+    ) {
+        out.values = self.sums(&kernel, out);
+    }
+
+    /// Every entry's sum of element contributions, in a fixed order.
+    fn sums<F: Fn(usize, &mut [f64]) + Sync>(&self, kernel: &F, out: &CsrMatrix) -> Vec<f64> {
+        assert_eq!(
+            out.pattern.id(),
+            self.pattern.id(),
+            "the matrix does not use the plan's pattern"
+        );
+        let buf = fill_element_buffer(&self.mat_offset, kernel);
+        let mut sums = vec![0.0; self.pattern.nnz()];
+        gather(&self.gather_ptr, &self.gather_pos, &buf, &mut sums);
+        sums
     }
 
     /// Assembles a vector: `kernel(e, out)` fills element e's ne-vector (zeroed before the

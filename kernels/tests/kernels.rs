@@ -553,3 +553,25 @@ fn non_positive_pivot_index_simplicial_and_supernodal() {
         );
     }
 }
+
+#[test]
+fn unsymmetric_assembly_keeps_each_entry_as_summed() {
+    // two 2-dof elements sharing dof 1, each with an unsymmetric 2x2 matrix
+    let mut conn = Connectivity::new();
+    conn.push(&[0, 1]);
+    conn.push(&[1, 2]);
+    let plan = AssemblyPlan::new(3, &conn);
+    let mats = [[1.0, 2.0, 3.0, 4.0], [5.0, 6.0, 7.0, 8.0]];
+    let mut k = CsrMatrix::zeros(plan.pattern().clone());
+    plan.assemble_unsymmetric(|e, ke| ke.copy_from_slice(&mats[e]), &mut k);
+    let expect = [[1.0, 2.0, 0.0], [3.0, 4.0 + 5.0, 6.0], [0.0, 7.0, 8.0]];
+    for (i, row) in expect.iter().enumerate() {
+        for (j, v) in row.iter().enumerate() {
+            assert_eq!(k.get(i, j), *v, "entry ({i}, {j})");
+        }
+    }
+    // the symmetric assembly averages the two triangles
+    plan.assemble(|e, ke| ke.copy_from_slice(&mats[e]), &mut k);
+    assert_eq!(k.get(0, 1), 2.5);
+    assert_eq!(k.get(1, 0), 2.5);
+}

@@ -293,12 +293,12 @@ impl<'a> Driver<'a> {
 
     /// One correction δ = K⁻¹ r with the strategy's matrix; `None` when that matrix is
     /// singular (a mechanism in the current contact states).
-    fn correction(&mut self, trial: &Trial, r: &[f64]) -> Result<Option<Vec<f64>>> {
+    fn correction(&mut self, trial: &Trial, r: &[f64], tangent: bool) -> Result<Option<Vec<f64>>> {
         let mut x = r.to_vec();
         match self.settings.strategy {
             Strategy::Initial => Ok(self.solve_k0(&mut x)?.then_some(x)),
             Strategy::Secant | Strategy::Newton => {
-                let newton = self.settings.strategy == Strategy::Newton;
+                let newton = self.settings.strategy == Strategy::Newton || tangent;
                 let local = self.local_stiffness(trial, newton);
                 self.system
                     .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
@@ -461,7 +461,17 @@ impl<'a> Driver<'a> {
             }
             prev_state = trial.state.clone();
             prev_force = trial.force.clone();
-            let delta = match self.correction(&trial, &r)? {
+            // the secant strategy takes a tangent step once the contact states have settled:
+            // with the states fixed the problem is linear but for the friction limit's
+            // dependence on the normal force, which the secant matrix leaves out (the
+            // secant iterations then contract by a constant factor, ~0.7 on the walls of
+            // docs/performance.md; the tangent step closes them in one or two)
+            let tangent = self.settings.strategy == Strategy::Newton
+                || (self.settings.strategy == Strategy::Secant
+                    && it > 1
+                    && !changed
+                    && trial.state.contains(&ContactState::Slip));
+            let delta = match self.correction(&trial, &r, tangent)? {
                 Some(d) => {
                     singular_streak = 0;
                     d
@@ -489,7 +499,7 @@ impl<'a> Driver<'a> {
             };
             // line search on the out-of-balance norm
             let mut best = self.line_search(&dq, &delta, rn, f_ext, presc);
-            if self.settings.strategy == Strategy::Newton && best.0 >= rn {
+            if tangent && best.0 >= rn {
                 // safeguarded Newton: where the tangent step does not reduce the
                 // out-of-balance force (slip/open cycling at a lightly loaded contact),
                 // take the secant step instead

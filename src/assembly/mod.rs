@@ -82,23 +82,27 @@ impl System {
     /// Stiffness (N/m) in the configuration `mesh` (node positions, rigid centroids and
     /// contact normals as they are now: the updated Lagrangian geometry) with a local
     /// stiffness per contact.
+    /// When a local stiffness is unsymmetric (Newton's tangent of a slipping contact), so
+    /// is the result (for an LU backend); otherwise it is symmetric to the bit.
     pub fn stiffness_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
         let nt = self.n_triangles;
-        self.plan.assemble(
-            |e, ke| {
-                if e < nt {
-                    let t = mesh.triangles[e];
-                    let p = t.map(|n| mesh.nodes[n as usize]);
-                    cst_stiffness(p, &self.tri_dt[e], ke);
-                } else {
-                    let c = e - nt;
-                    let con = &mesh.contacts[c];
-                    let (ml, mm) = (mesh.node_map(con.node_l), mesh.node_map(con.node_m));
-                    contact_stiffness(&ml, &mm, con.normal, &local[c], ke);
-                }
-            },
-            out,
-        );
+        let kernel = |e: usize, ke: &mut [f64]| {
+            if e < nt {
+                let t = mesh.triangles[e];
+                let p = t.map(|n| mesh.nodes[n as usize]);
+                cst_stiffness(p, &self.tri_dt[e], ke);
+            } else {
+                let c = e - nt;
+                let con = &mesh.contacts[c];
+                let (ml, mm) = (mesh.node_map(con.node_l), mesh.node_map(con.node_m));
+                contact_stiffness(&ml, &mm, con.normal, &local[c], ke);
+            }
+        };
+        if local.iter().all(|k| k[0][1] == k[1][0]) {
+            self.plan.assemble(kernel, out);
+        } else {
+            self.plan.assemble_unsymmetric(kernel, out);
+        }
     }
 
     /// tDₑ (Pa·m) of triangle `t`.

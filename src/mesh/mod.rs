@@ -8,7 +8,7 @@
 //! three degrees of freedom (u, v, θ) at its centroid and its nodes follow it rigidly; a
 //! fixed block has no unknowns.
 
-mod triangulate;
+pub mod triangulate;
 
 use crate::geometry::polygon::{centroid, dot, norm, signed_area, sub, Point};
 use crate::geometry::{find_joints, JointSegment};

@@ -36,19 +36,10 @@ fn assert_finite(out: &Outcome) {
 /// `scale` (the joint band too, so that the problem is geometrically similar).
 fn tilting(b: f64, d: f64, phi: f64, kind: &str, scale: f64) -> String {
     let s = scale;
-    format!(
-        r#"
-[[material]]
-name = "stone"
-lame_lambda = 5e9
-lame_mu = 5e9
-unit_weight = 20e3
-[[joint]]
-name = "dry"
-normal_modulus = 20e9
-shear_modulus = 8e9
-band = {band}
-friction_angle = {phi}
+    let band = 0.01 * s * d.min(b).min(1.0);
+    common::stone_and_dry_joint(20e9, 8e9, band, phi)
+        + &format!(
+            r#"
 [[block]]
 name = "base"
 material = "stone"
@@ -63,13 +54,12 @@ vertices = [[0.0, 0.0], [{bs}, 0.0], [{bs}, {ds}], [0.0, {ds}]]
 type = "capacity"
 load_steps = 2
 "#,
-        band = 0.01 * s * d.min(b).min(1.0),
-        x0 = -0.5 * b * s,
-        x1 = 1.5 * b * s,
-        y0 = -0.5 * d.min(b) * s,
-        bs = b * s,
-        ds = d * s,
-    )
+            x0 = -0.5 * b * s,
+            x1 = 1.5 * b * s,
+            y0 = -0.5 * d.min(b) * s,
+            bs = b * s,
+            ds = d * s,
+        )
 }
 
 /// Capacity of the block: min(b/d, tan φ) within 1 % with the right mode (1 % is the

@@ -22,19 +22,9 @@ use reference::arch::{capacity, stands, JointGeom, LimitOptions, RigidBlock};
 /// R: mean radius 1 m; span at the intrados 2 R_i = 2 (R − t/2).
 fn scene(t_over_r: f64, n: usize, analysis: &str) -> String {
     let t = t_over_r;
-    format!(
-        r#"
-[[material]]
-name = "stone"
-lame_lambda = 5e9
-lame_mu = 5e9
-unit_weight = 20e3
-[[joint]]
-name = "dry"
-normal_modulus = 50e9
-shear_modulus = 20e9
-band = 0.001
-friction_angle = 60.0
+    common::stone_and_dry_joint(50e9, 20e9, 0.001, 60.0)
+        + &format!(
+            r#"
 [[generate]]
 type = "arch"
 material = "stone"
@@ -48,8 +38,8 @@ pier_height = 0.0
 type = "{analysis}"
 load_steps = 4
 "#,
-        2.0 - t
-    )
+            2.0 - t
+        )
 }
 
 /// The limit-analysis model of the scene's own polygons: joints are the edges two blocks

@@ -9,19 +9,9 @@ mod common;
 use dfem::analysis::Status;
 
 fn scene(b: f64, d: f64, n_blocks: usize, phi: f64, kind: &str) -> String {
-    let mut s = format!(
-        r#"
-[[material]]
-name = "stone"
-lame_lambda = 5e9
-lame_mu = 5e9
-unit_weight = 20e3
-[[joint]]
-name = "dry"
-normal_modulus = 20e9
-shear_modulus = 8e9
-band = 0.01
-friction_angle = {phi}
+    let mut s = common::stone_and_dry_joint(20e9, 8e9, 0.01, phi)
+        + &format!(
+            r#"
 [[block]]
 name = "base"
 material = "stone"
@@ -31,9 +21,9 @@ vertices = [[-1.0, -0.5], [{}, -0.5], [{}, 0.0], [-1.0, 0.0]]
 type = "capacity"
 load_steps = 2
 "#,
-        b + 1.0,
-        b + 1.0
-    );
+            b + 1.0,
+            b + 1.0
+        );
     let h = d / n_blocks as f64;
     for k in 0..n_blocks {
         let (y0, y1) = (k as f64 * h, (k + 1) as f64 * h);

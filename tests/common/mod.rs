@@ -33,3 +33,24 @@ pub fn tmp_dir(name: &str) -> PathBuf {
 pub fn rel_err(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
+
+/// TOML of a stone (λ = μ = 5 GPa, γ = 20 kN/m³) and a dry joint "dry" with normal and
+/// shear moduli `en`, `gs` (Pa), band thickness `band` (m) and friction angle `phi`
+/// (degrees), no cohesion: the material pair of the tilting, arch and stress tests.
+pub fn stone_and_dry_joint(en: f64, gs: f64, band: f64, phi: f64) -> String {
+    format!(
+        r#"
+[[material]]
+name = "stone"
+lame_lambda = 5e9
+lame_mu = 5e9
+unit_weight = 20e3
+[[joint]]
+name = "dry"
+normal_modulus = {en:e}
+shear_modulus = {gs:e}
+band = {band:e}
+friction_angle = {phi}
+"#
+    )
+}

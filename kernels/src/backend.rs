@@ -1,6 +1,7 @@
 //! The linear solver interface shared by every backend, and the run-time registry.
 
 use crate::csr::{CsrMatrix, CsrPattern};
+use crate::ordering::FillOrdering;
 use std::sync::Arc;
 
 /// Why a factorization or a solve failed. Indices are unknown numbers in the original
@@ -43,12 +44,25 @@ pub struct SolverStats {
     pub symbolic_factorizations: usize,
     /// Number of numeric factorizations (or preconditioner setups for iterative solvers).
     pub numeric_factorizations: usize,
+    /// Number of calls to `factorize` that returned at once because the values were
+    /// bit-identical to those of the last successful factorization of the same pattern
+    /// (not counted in `numeric_factorizations`).
+    pub skipped_factorizations: usize,
     /// Number of solves.
     pub solves: usize,
     /// Total iterations of an iterative solver (0 for direct solvers).
     pub iterations: usize,
+    /// Iterations of the last solve of an iterative solver (0 for direct solvers).
+    pub last_iterations: usize,
+    /// True relative residual ‖b − A x‖₂ / ‖b‖₂ of the last solve, recomputed from the
+    /// returned x (not the recursively updated residual). Iterative solvers only; NaN
+    /// for the direct backends, which do not keep A.
+    pub last_true_residual: f64,
     /// Wall time spent in symbolic analyses, seconds.
     pub symbolic_seconds: f64,
+    /// Part of `symbolic_seconds` spent in an external fill-reducing ordering (METIS),
+    /// seconds; 0 with AMD, which faer computes inside its symbolic phase.
+    pub ordering_seconds: f64,
     /// Wall time spent in numeric factorizations, seconds.
     pub numeric_seconds: f64,
     /// Wall time spent in solves, seconds.
@@ -77,14 +91,28 @@ pub trait LinearBackend: Send {
 }
 
 /// Names accepted by [`backend_from_name`].
-pub const BACKENDS: &[&str] = &["faer-cholesky", "faer-ldlt", "faer-lu", "pcg"];
+pub const BACKENDS: &[&str] = &[
+    "faer-cholesky",
+    "faer-cholesky-metis",
+    "faer-ldlt",
+    "faer-ldlt-metis",
+    "faer-lu",
+    "pcg",
+];
 
-/// Builds a backend from its name (one of [`BACKENDS`]) with default settings.
+/// Builds a backend from its name (one of [`BACKENDS`]) with default settings. The
+/// `-metis` variants order the unknowns by METIS nested dissection instead of AMD.
 /// The error message lists the valid names.
 pub fn backend_from_name(name: &str) -> Result<Box<dyn LinearBackend>, String> {
     match name {
         "faer-cholesky" => Ok(Box::new(crate::faer_backend::FaerCholesky::new())),
+        "faer-cholesky-metis" => Ok(Box::new(
+            crate::faer_backend::FaerCholesky::new().with_ordering(FillOrdering::Metis),
+        )),
         "faer-ldlt" => Ok(Box::new(crate::faer_backend::FaerLdlt::new())),
+        "faer-ldlt-metis" => Ok(Box::new(
+            crate::faer_backend::FaerLdlt::new().with_ordering(FillOrdering::Metis),
+        )),
         "faer-lu" => Ok(Box::new(crate::faer_backend::FaerLu::new())),
         "pcg" => Ok(Box::new(crate::pcg::Pcg::new())),
         _ => Err(format!(

@@ -1,7 +1,8 @@
 //! Direct solvers on faer's sparse factorizations: [`FaerCholesky`] (LLᵀ),
 //! [`FaerLdlt`] (LDLᵀ without pivoting) and [`FaerLu`] (LU with partial pivoting).
 //!
-//! All of them keep the symbolic analysis (AMD ordering, elimination tree, supernodes),
+//! All of them keep the symbolic analysis (fill-reducing ordering — AMD by default, METIS
+//! nested dissection on request for the Cholesky backends —, elimination tree, supernodes),
 //! the factor value buffer and the scratch memory for as long as the pattern id does not
 //! change, and they factorize and solve with `Par::Seq`: faer's sparse factorizations
 //! gain nothing from a second thread on 2D problems, and sequential runs give the same
@@ -13,6 +14,7 @@
 
 use crate::backend::{LinearBackend, SolveError, SolverStats};
 use crate::csr::{CsrMatrix, CsrPattern};
+use crate::ordering::{metis_nested_dissection, FillOrdering};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
@@ -24,6 +26,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
 use faer::sparse::linalg::{LuError, SupernodalThreshold};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::perm::PermRef;
 use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
 use std::time::Instant;
@@ -121,6 +124,7 @@ impl CholAnalysis {
 /// Shared implementation of the LLᵀ and LDLᵀ backends.
 struct CholeskyCore {
     kind: Kind,
+    ordering: FillOrdering,
     supernodal_threshold: f64,
     analysis: Option<CholAnalysis>,
     stats: SolverStats,
@@ -130,10 +134,12 @@ impl CholeskyCore {
     fn new(kind: Kind) -> Self {
         Self {
             kind,
+            ordering: FillOrdering::Amd,
             supernodal_threshold: 1.0,
             analysis: None,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
+                last_true_residual: f64::NAN,
                 ..Default::default()
             },
         }
@@ -156,9 +162,30 @@ impl CholeskyCore {
             supernodal_flop_ratio_threshold: SupernodalThreshold(self.supernodal_threshold),
             ..Default::default()
         };
-        let symbolic =
-            factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Amd, params)
-                .map_err(faer_err)?;
+        let symbolic = match self.ordering {
+            FillOrdering::Amd => {
+                factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Amd, params)
+                    .map_err(faer_err)?
+            }
+            FillOrdering::Metis => {
+                if n > i32::MAX as usize {
+                    return Err(SolveError::Other(format!(
+                        "{n} unknowns: too many for METIS' 32-bit indices"
+                    )));
+                }
+                let t_order = Instant::now();
+                let (fwd, inv) = metis_nested_dissection(pattern)?;
+                self.stats.ordering_seconds += t_order.elapsed().as_secs_f64();
+                let perm = PermRef::new_checked(&fwd, &inv, n);
+                factorize_symbolic_cholesky(
+                    sym,
+                    Side::Lower,
+                    SymmetricOrdering::Custom(perm),
+                    params,
+                )
+                .map_err(faer_err)?
+            }
+        };
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
@@ -332,7 +359,8 @@ impl CholeskyCore {
     }
 }
 
-/// Sparse Cholesky LLᵀ (faer, AMD ordering, supernodal or simplicial chosen by faer).
+/// Sparse Cholesky LLᵀ (faer; AMD or METIS ordering, see [`FaerCholesky::with_ordering`];
+/// supernodal or simplicial chosen by faer).
 /// Fails with [`SolveError::NotPositiveDefinite`] on a non-positive pivot; after a
 /// success, `stats().min_pivot_ratio` = minᵢ L_ii² / a_ii.
 pub struct FaerCholesky(CholeskyCore);
@@ -363,6 +391,19 @@ impl FaerCholesky {
         self.0.analysis = None;
         self
     }
+
+    /// Sets the fill-reducing ordering (takes effect at the next analysis): AMD (default)
+    /// or METIS nested dissection; the backend's name gets a `-metis` suffix with METIS.
+    pub fn with_ordering(mut self, ordering: FillOrdering) -> Self {
+        self.0.ordering = ordering;
+        self.0.analysis = None;
+        self
+    }
+
+    /// The fill-reducing ordering in use.
+    pub fn ordering(&self) -> FillOrdering {
+        self.0.ordering
+    }
 }
 
 impl Default for FaerLdlt {
@@ -384,13 +425,29 @@ impl FaerLdlt {
         self.0.analysis = None;
         self
     }
+
+    /// Sets the fill-reducing ordering (takes effect at the next analysis): AMD (default)
+    /// or METIS nested dissection; the backend's name gets a `-metis` suffix with METIS.
+    pub fn with_ordering(mut self, ordering: FillOrdering) -> Self {
+        self.0.ordering = ordering;
+        self.0.analysis = None;
+        self
+    }
+
+    /// The fill-reducing ordering in use.
+    pub fn ordering(&self) -> FillOrdering {
+        self.0.ordering
+    }
 }
 
 macro_rules! chol_backend {
-    ($t:ty, $name:literal) => {
+    ($t:ty, $name:literal, $metis_name:literal) => {
         impl LinearBackend for $t {
             fn name(&self) -> &'static str {
-                $name
+                match self.0.ordering {
+                    FillOrdering::Amd => $name,
+                    FillOrdering::Metis => $metis_name,
+                }
             }
             fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError> {
                 self.0.analyze(pattern)
@@ -407,8 +464,8 @@ macro_rules! chol_backend {
         }
     };
 }
-chol_backend!(FaerCholesky, "faer-cholesky");
-chol_backend!(FaerLdlt, "faer-ldlt");
+chol_backend!(FaerCholesky, "faer-cholesky", "faer-cholesky-metis");
+chol_backend!(FaerLdlt, "faer-ldlt", "faer-ldlt-metis");
 
 struct LuAnalysis {
     pattern: Arc<CsrPattern>,
@@ -443,6 +500,7 @@ impl FaerLu {
             analysis: None,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
+                last_true_residual: f64::NAN,
                 ..Default::default()
             },
         }

@@ -7,6 +7,7 @@
 //! * [`backend`]: the [`LinearBackend`] trait and the registry [`backend_from_name`].
 //! * [`faer_backend`]: sparse Cholesky LLᵀ, LDLᵀ and LU on faer.
 //! * [`pcg`]: Jacobi-preconditioned conjugate gradients.
+//! * [`ordering`]: fill-reducing orderings (AMD, METIS nested dissection).
 //! * [`mm`]: Matrix Market input and output.
 //!
 //! Determinism: assembly, `mul_vec` and PCG reductions use fixed chunking; the direct
@@ -17,10 +18,12 @@ pub mod backend;
 pub mod csr;
 pub mod faer_backend;
 pub mod mm;
+pub mod ordering;
 pub mod pcg;
 
 pub use assembly::{AssemblyPlan, Connectivity, CONSTRAINED};
 pub use backend::{backend_from_name, LinearBackend, SolveError, SolverStats, BACKENDS};
 pub use csr::{CsrMatrix, CsrPattern};
 pub use faer_backend::{FaerCholesky, FaerLdlt, FaerLu};
+pub use ordering::FillOrdering;
 pub use pcg::Pcg;

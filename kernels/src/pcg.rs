@@ -55,6 +55,7 @@ impl Pcg {
             pattern_id: None,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
+                last_true_residual: f64::NAN,
                 ..Default::default()
             },
         }

@@ -83,6 +83,8 @@ pub trait LinearBackend: Send {
     /// Symbolic phase (ordering, elimination structure). Cached by pattern id: a second call with the same pattern does nothing.
     fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError>;
     /// Numeric phase; calls analyze if the pattern changed. For direct solvers, fills min_pivot_ratio.
+    /// Values bit-identical to those of the last successful factorization of the same
+    /// pattern return at once and count in `skipped_factorizations`.
     fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError>;
     /// Solve A x = rhs in place, with the last factorized matrix.
     fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError>;

@@ -8,6 +8,9 @@
 //! gain nothing from a second thread on 2D problems, and sequential runs give the same
 //! bits for any rayon pool size.
 //!
+//! `factorize` with values bit-identical to those of the last successful factorization of
+//! the same pattern returns at once (counted in `SolverStats::skipped_factorizations`).
+//!
 //! The symmetric CSR matrix is passed to faer as a compressed-sparse-column view of the
 //! same arrays (a structurally symmetric CSR is its own CSC); with `Side::Lower` faer
 //! reads only the entries with row ≥ column.
@@ -18,6 +21,7 @@ use crate::ordering::{metis_nested_dissection, FillOrdering};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
+use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
@@ -26,7 +30,6 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
 use faer::sparse::linalg::{LuError, SupernodalThreshold};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::perm::PermRef;
 use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
 use std::time::Instant;
@@ -41,6 +44,11 @@ fn col_ptr_u32(p: &CsrPattern) -> Result<Vec<u32>, SolveError> {
         )));
     }
     Ok(p.row_ptr().iter().map(|&x| x as u32).collect())
+}
+
+/// `true` when both slices have the same length and bit-identical entries.
+pub(crate) fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
 fn faer_err(e: impl std::fmt::Debug) -> SolveError {
@@ -72,6 +80,8 @@ struct CholAnalysis {
     mem: MemBuffer,
     diag_pos: Vec<usize>,
     factored: bool,
+    /// Values of the last successful factorization (to skip an identical one).
+    last_values: Vec<f64>,
 }
 
 impl CholAnalysis {
@@ -203,6 +213,7 @@ impl CholeskyCore {
             mem,
             diag_pos: pattern.diagonal_positions(),
             factored: false,
+            last_values: Vec::new(),
         });
         self.stats.symbolic_factorizations += 1;
         self.stats.symbolic_seconds += t.elapsed().as_secs_f64();
@@ -214,13 +225,18 @@ impl CholeskyCore {
         let t = Instant::now();
         let kind = self.kind;
         let an = self.analysis.as_mut().expect("analyzed");
-        an.factored = false;
-        let n = an.pattern.n();
         if a.values.len() != an.pattern.nnz() {
+            an.factored = false;
             return Err(SolveError::Other(
                 "matrix values do not match the pattern".into(),
             ));
         }
+        if an.factored && same_bits(&a.values, &an.last_values) {
+            self.stats.skipped_factorizations += 1;
+            return Ok(());
+        }
+        an.factored = false;
+        let n = an.pattern.n();
         let sym =
             SymbolicSparseColMatRef::new_checked(n, n, &an.col_ptr, None, an.pattern.col_idx());
         let mat = SparseColMatRef::new(sym, &a.values);
@@ -284,6 +300,8 @@ impl CholeskyCore {
                 }
                 self.stats.min_pivot_ratio = best.0;
                 self.stats.min_pivot_index = best.1;
+                an.last_values.clear();
+                an.last_values.extend_from_slice(&a.values);
                 an.factored = true;
                 Ok(())
             }
@@ -474,6 +492,8 @@ struct LuAnalysis {
     numeric: NumericLu<u32, f64>,
     mem: MemBuffer,
     factored: bool,
+    /// Values of the last successful factorization (to skip an identical one).
+    last_values: Vec<f64>,
 }
 
 /// Sparse LU with partial pivoting (faer, COLAMD column ordering); the symbolic analysis
@@ -539,6 +559,7 @@ impl LinearBackend for FaerLu {
             numeric: NumericLu::new(),
             mem,
             factored: false,
+            last_values: Vec::new(),
         });
         self.stats.symbolic_factorizations += 1;
         self.stats.symbolic_seconds += t.elapsed().as_secs_f64();
@@ -549,12 +570,17 @@ impl LinearBackend for FaerLu {
         self.analyze(&a.pattern)?;
         let t = Instant::now();
         let an = self.analysis.as_mut().expect("analyzed");
-        an.factored = false;
         if a.values.len() != an.pattern.nnz() {
+            an.factored = false;
             return Err(SolveError::Other(
                 "matrix values do not match the pattern".into(),
             ));
         }
+        if an.factored && same_bits(&a.values, &an.last_values) {
+            self.stats.skipped_factorizations += 1;
+            return Ok(());
+        }
+        an.factored = false;
         let n = an.pattern.n();
         let sym =
             SymbolicSparseColMatRef::new_checked(n, n, &an.col_ptr, None, an.pattern.col_idx());
@@ -573,6 +599,8 @@ impl LinearBackend for FaerLu {
         self.stats.numeric_seconds += t.elapsed().as_secs_f64();
         match r {
             Ok(()) => {
+                an.last_values.clear();
+                an.last_values.extend_from_slice(&a.values);
                 an.factored = true;
                 Ok(())
             }

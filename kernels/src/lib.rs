@@ -6,7 +6,8 @@
 //! * [`assembly`]: deterministic parallel assembly ([`AssemblyPlan`]).
 //! * [`backend`]: the [`LinearBackend`] trait and the registry [`backend_from_name`].
 //! * [`faer_backend`]: sparse Cholesky LLᵀ, LDLᵀ and LU on faer.
-//! * [`pcg`]: Jacobi-preconditioned conjugate gradients.
+//! * [`pcg`]: preconditioned conjugate gradients (Jacobi, block-Jacobi, two-level with a
+//!   rigid-body coarse space).
 //! * [`ordering`]: fill-reducing orderings (AMD, METIS nested dissection).
 //! * [`mm`]: Matrix Market input and output.
 //!
@@ -26,4 +27,4 @@ pub use backend::{backend_from_name, LinearBackend, SolveError, SolverStats, BAC
 pub use csr::{CsrMatrix, CsrPattern};
 pub use faer_backend::{FaerCholesky, FaerLdlt, FaerLu};
 pub use ordering::FillOrdering;
-pub use pcg::Pcg;
+pub use pcg::{BlockNodes2d, CoarseCorrection, CoarseSpace, Pcg, Preconditioner};

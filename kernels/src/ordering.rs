@@ -41,11 +41,11 @@ pub fn metis_nested_dissection(pattern: &CsrPattern) -> Result<(Vec<u32>, Vec<u3
     // group[v] = first unknown of vertex v; vertex_of[i] = vertex of unknown i
     let mut first = Vec::with_capacity(n + 1);
     let mut vertex_of = vec![0u32; n];
-    for i in 0..n {
+    for (i, v) in vertex_of.iter_mut().enumerate() {
         if i == 0 || pattern.row_cols(i) != pattern.row_cols(i - 1) {
             first.push(i);
         }
-        vertex_of[i] = (first.len() - 1) as u32;
+        *v = (first.len() - 1) as u32;
     }
     first.push(n);
     let nv = first.len() - 1;
@@ -53,9 +53,9 @@ pub fn metis_nested_dissection(pattern: &CsrPattern) -> Result<(Vec<u32>, Vec<u3
     let mut xadj: Vec<i32> = Vec::with_capacity(nv + 1);
     let mut adjncy: Vec<i32> = Vec::new();
     xadj.push(0);
-    for v in 0..nv {
+    for (v, &f) in first[..nv].iter().enumerate() {
         let mut last = u32::MAX;
-        for &c in pattern.row_cols(first[v]) {
+        for &c in pattern.row_cols(f) {
             let w = vertex_of[c as usize];
             if w as usize != v && w != last {
                 adjncy.push(w as i32);

@@ -4,9 +4,11 @@
 //! All of them keep the symbolic analysis (fill-reducing ordering — AMD by default, METIS
 //! nested dissection on request for the Cholesky backends —, elimination tree, supernodes),
 //! the factor value buffer and the scratch memory for as long as the pattern id does not
-//! change, and they factorize and solve with `Par::Seq`: faer's sparse factorizations
-//! gain nothing from a second thread on 2D problems, and sequential runs give the same
-//! bits for any rayon pool size.
+//! change. By default they factorize and solve with `Par::Seq`: faer's sparse
+//! factorizations gain little from a second thread on 2D problems, and sequential runs
+//! give the same bits for any rayon pool size. `with_threads(k)` on the Cholesky backends
+//! passes `Par::rayon(k)` to faer's dense supernode kernels instead (not bit-identical to
+//! the sequential run).
 //!
 //! `factorize` with values bit-identical to those of the last successful factorization of
 //! the same pattern returns at once (counted in `SolverStats::skipped_factorizations`).
@@ -136,6 +138,8 @@ struct CholeskyCore {
     kind: Kind,
     ordering: FillOrdering,
     supernodal_threshold: f64,
+    /// Threads given to faer's numeric kernels (1 = `Par::Seq`).
+    threads: usize,
     analysis: Option<CholAnalysis>,
     stats: SolverStats,
 }
@@ -146,12 +150,21 @@ impl CholeskyCore {
             kind,
             ordering: FillOrdering::Amd,
             supernodal_threshold: 1.0,
+            threads: 1,
             analysis: None,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
                 last_true_residual: f64::NAN,
                 ..Default::default()
             },
+        }
+    }
+
+    fn par(&self) -> Par {
+        if self.threads <= 1 {
+            Par::Seq
+        } else {
+            Par::rayon(self.threads)
         }
     }
 
@@ -197,9 +210,9 @@ impl CholeskyCore {
             }
         };
         let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+            symbolic.factorize_numeric_llt_scratch::<f64>(self.par(), Default::default()),
+            symbolic.factorize_numeric_ldlt_scratch::<f64>(self.par(), Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, self.par()),
         ]);
         let mem = MemBuffer::try_new(req)
             .map_err(|_| SolveError::Other("out of memory for faer scratch".into()))?;
@@ -224,6 +237,7 @@ impl CholeskyCore {
         self.analyze(&a.pattern)?;
         let t = Instant::now();
         let kind = self.kind;
+        let par = self.par();
         let an = self.analysis.as_mut().expect("analyzed");
         if a.values.len() != an.pattern.nnz() {
             an.factored = false;
@@ -248,7 +262,7 @@ impl CholeskyCore {
                     mat,
                     Side::Lower,
                     LltRegularization::default(),
-                    Par::Seq,
+                    par,
                     MemStack::new(&mut an.mem),
                     Default::default(),
                 )
@@ -261,7 +275,7 @@ impl CholeskyCore {
                     mat,
                     Side::Lower,
                     LdltRegularization::default(),
-                    Par::Seq,
+                    par,
                     MemStack::new(&mut an.mem),
                     Default::default(),
                 )
@@ -323,7 +337,7 @@ impl CholeskyCore {
                         mat,
                         Side::Lower,
                         LdltRegularization::default(),
-                        Par::Seq,
+                        par,
                         MemStack::new(&mut an.mem),
                         Default::default(),
                     )
@@ -344,6 +358,7 @@ impl CholeskyCore {
     }
 
     fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
+        let par = self.par();
         let an = match &mut self.analysis {
             Some(an) if an.factored => an,
             _ => {
@@ -361,13 +376,13 @@ impl CholeskyCore {
             Kind::Llt => LltRef::new(&an.symbolic, &an.l_values).solve_in_place_with_conj(
                 Conj::No,
                 x,
-                Par::Seq,
+                par,
                 stack,
             ),
             Kind::Ldlt => LdltRef::new(&an.symbolic, &an.l_values).solve_in_place_with_conj(
                 Conj::No,
                 x,
-                Par::Seq,
+                par,
                 stack,
             ),
         }
@@ -422,6 +437,16 @@ impl FaerCholesky {
     pub fn ordering(&self) -> FillOrdering {
         self.0.ordering
     }
+
+    /// Number of threads for faer's numeric factorization and solve (default 1 =
+    /// sequential, bit-identical for any rayon pool; k > 1 passes `Par::rayon(k)`, which
+    /// parallelises inside the dense supernode kernels only and is not bit-identical to
+    /// the sequential run). Takes effect at the next analysis.
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.0.threads = threads.max(1);
+        self.0.analysis = None;
+        self
+    }
 }
 
 impl Default for FaerLdlt {
@@ -455,6 +480,16 @@ impl FaerLdlt {
     /// The fill-reducing ordering in use.
     pub fn ordering(&self) -> FillOrdering {
         self.0.ordering
+    }
+
+    /// Number of threads for faer's numeric factorization and solve (default 1 =
+    /// sequential, bit-identical for any rayon pool; k > 1 passes `Par::rayon(k)`, which
+    /// parallelises inside the dense supernode kernels only and is not bit-identical to
+    /// the sequential run). Takes effect at the next analysis.
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.0.threads = threads.max(1);
+        self.0.analysis = None;
+        self
     }
 }
 

@@ -44,10 +44,12 @@ def main(path):
             verdict = "faster" if ref["factor_solve_s"] < r["factor_solve_s"] else "slower"
             print(f"- dfem default ({ref['factor_solve_s']:.3f} s) is {verdict} than {r['tool']} "
                   f"{r['method']} ({r['factor_solve_s']:.3f} s)")
-        for r in ours:
+        for r in direct:
             if r.get("refactor_s") and r.get("factor_s"):
-                print(f"- {r['method']}: refactorization / first factorization = "
-                      f"{100 * r['refactor_s'] / r['factor_s']:.0f} % (target <= 70 %)")
+                first = r["factor_s"] + (r.get("analyze_s") or 0.0)
+                print(f"- {r['tool']} {r['method']}: refactorization = "
+                      f"{100 * r['refactor_s'] / r['factor_s']:.0f} % of the first numeric factorization, "
+                      f"{100 * r['refactor_s'] / first:.0f} % of analysis + first factorization (target <= 70 %)")
 
 
 if __name__ == "__main__":

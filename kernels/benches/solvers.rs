@@ -313,6 +313,7 @@ fn main() {
     let mut json: Option<String> = None;
     let mut time = true;
     let mut pcg = true;
+    let mut tune = 0usize;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut val = |what: &str| {
@@ -327,6 +328,7 @@ fn main() {
             "--json" => json = Some(val("--json")),
             "--no-time" => time = false,
             "--skip-pcg" => pcg = false,
+            "--tune" => tune = val("--tune").parse().expect("--tune: rounds"),
             "--bench" => {} // passed by `cargo bench`
             other => panic!("unknown argument {other}"),
         }
@@ -347,6 +349,10 @@ fn main() {
         eprintln!("# wrote {}/elast2d_{n}.mtx and _rhs.mtx", dir.display());
     }
     if !time {
+        return;
+    }
+    if tune > 0 {
+        tune_faer(&m, tune);
         return;
     }
     let threads = rayon::current_num_threads();
@@ -439,17 +445,18 @@ fn main() {
         m.a.n(),
         m.a.pattern.nnz()
     );
-    println!("| solver | symbolic (s) [ordering] | first numeric (s) | refactor (s) | refactor / first | solve (s) | factor + solve (s) | nnz(L) | ‖b − Ax‖/‖b‖ |");
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("| solver | symbolic (s) [ordering] | first numeric (s) | refactor (s) | refactor / first numeric | refactor / (symbolic + first numeric) | solve (s) | factor + solve (s) | nnz(L) | ‖b − Ax‖/‖b‖ |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for r in &rows_direct {
         println!(
-            "| {} | {:.3} [{:.3}] | {:.3} | {:.3} | {:.0} % | {:.3} | **{:.3}** | {:.2} M | {:.1e} |",
+            "| {} | {:.3} [{:.3}] | {:.3} | {:.3} | {:.0} % | {:.0} % | {:.3} | **{:.3}** | {:.2} M | {:.1e} |",
             r.method,
             r.symbolic,
             r.ordering,
             r.numeric,
             r.refactor,
             100.0 * r.refactor / r.numeric,
+            100.0 * r.refactor / (r.symbolic + r.numeric),
             r.solve,
             r.factor_solve,
             r.nnz_l as f64 / 1e6,
@@ -478,5 +485,106 @@ fn main() {
         for r in &rows_iter {
             writeln!(f, "{}", json_line(r, n, false)).expect("write JSON");
         }
+    }
+}
+
+/// Interleaved rounds over faer settings; prints the minimum time of each phase.
+fn tune_faer(m: &P1, rounds: usize) {
+    const MAX: usize = usize::MAX;
+    type MakeChol = Box<dyn Fn() -> FaerCholesky>;
+    let variants: Vec<(&str, MakeChol)> = vec![
+        ("default (THP)", Box::new(FaerCholesky::new)),
+        (
+            "no THP",
+            Box::new(|| FaerCholesky::new().with_huge_pages(false)),
+        ),
+        (
+            "relax 8/32/96",
+            Box::new(|| {
+                FaerCholesky::new().with_supernode_relaxation(Some(vec![
+                    (8, 1.0),
+                    (32, 0.8),
+                    (96, 0.2),
+                    (MAX, 0.08),
+                ]))
+            }),
+        ),
+        (
+            "relax 16/64/256",
+            Box::new(|| {
+                FaerCholesky::new().with_supernode_relaxation(Some(vec![
+                    (16, 1.0),
+                    (64, 0.5),
+                    (256, 0.2),
+                    (MAX, 0.1),
+                ]))
+            }),
+        ),
+        (
+            "relax less",
+            Box::new(|| {
+                FaerCholesky::new().with_supernode_relaxation(Some(vec![
+                    (4, 1.0),
+                    (16, 0.5),
+                    (MAX, 0.02),
+                ]))
+            }),
+        ),
+        (
+            "METIS",
+            Box::new(|| FaerCholesky::new().with_ordering(FillOrdering::Metis)),
+        ),
+        (
+            "METIS relax 8/32/96",
+            Box::new(|| {
+                FaerCholesky::new()
+                    .with_ordering(FillOrdering::Metis)
+                    .with_supernode_relaxation(Some(vec![
+                        (8, 1.0),
+                        (32, 0.8),
+                        (96, 0.2),
+                        (MAX, 0.08),
+                    ]))
+            }),
+        ),
+    ];
+    let mut best = vec![[f64::INFINITY; 4]; variants.len()];
+    let mut nnz = vec![0; variants.len()];
+    let mut a2 = m.a.clone();
+    a2.values.iter_mut().for_each(|v| *v *= 1.001);
+    for _ in 0..rounds {
+        for (k, (_, make)) in variants.iter().enumerate() {
+            let mut s = make();
+            let t = Instant::now();
+            s.analyze(&m.a.pattern).unwrap();
+            let ta = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            s.factorize(&m.a).unwrap();
+            let tn = t.elapsed().as_secs_f64();
+            let mut x = m.b.clone();
+            let t = Instant::now();
+            s.solve(&mut x).unwrap();
+            let tv = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            s.factorize(&a2).unwrap();
+            let tr = t.elapsed().as_secs_f64();
+            for (b, v) in best[k].iter_mut().zip([ta, tn, tr, tv]) {
+                *b = b.min(v);
+            }
+            nnz[k] = s.stats().factor_nnz;
+        }
+    }
+    println!("| variant | analysis | first numeric | refactor | solve | nnz(L) stored |");
+    println!("|---|---|---|---|---|---|");
+    for (k, (name, _)) in variants.iter().enumerate() {
+        let b = best[k];
+        println!(
+            "| {name} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} M |",
+            b[0],
+            b[1],
+            b[2],
+            b[3],
+            nnz[k] as f64 / 1e6
+        );
     }
 }

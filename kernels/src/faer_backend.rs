@@ -133,6 +133,36 @@ impl CholAnalysis {
     }
 }
 
+/// Asks Linux for transparent huge pages on the (not yet touched) buffer: the first
+/// factorization then takes a few hundred page faults instead of one per 4 KiB, and the
+/// factorization runs with fewer TLB misses. A hint only: errors are ignored, and other
+/// systems do nothing.
+#[allow(unused_variables)]
+fn advise_huge_pages(buf: &mut [f64]) {
+    #[cfg(target_os = "linux")]
+    {
+        const HUGE: usize = 2 << 20;
+        let bytes = std::mem::size_of_val(buf);
+        if bytes < 2 * HUGE {
+            return;
+        }
+        let start = buf.as_mut_ptr() as usize;
+        let aligned = start.next_multiple_of(HUGE);
+        let end = (start + bytes) / HUGE * HUGE;
+        if end > aligned {
+            // SAFETY: the range lies inside `buf`, which we borrow mutably; MADV_HUGEPAGE
+            // changes no content, only how the pages are backed.
+            unsafe {
+                libc::madvise(
+                    aligned as *mut libc::c_void,
+                    end - aligned,
+                    libc::MADV_HUGEPAGE,
+                );
+            }
+        }
+    }
+}
+
 /// Shared implementation of the LLᵀ and LDLᵀ backends.
 struct CholeskyCore {
     kind: Kind,
@@ -140,6 +170,10 @@ struct CholeskyCore {
     supernodal_threshold: f64,
     /// Threads given to faer's numeric kernels (1 = `Par::Seq`).
     threads: usize,
+    /// faer's supernode relaxation thresholds (`None`: faer's defaults).
+    relax: Option<Vec<(usize, f64)>>,
+    /// Ask the kernel for transparent huge pages for the factor values.
+    huge_pages: bool,
     analysis: Option<CholAnalysis>,
     stats: SolverStats,
 }
@@ -151,6 +185,8 @@ impl CholeskyCore {
             ordering: FillOrdering::Amd,
             supernodal_threshold: 1.0,
             threads: 1,
+            relax: None,
+            huge_pages: true,
             analysis: None,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
@@ -181,10 +217,13 @@ impl CholeskyCore {
         let n = pattern.n();
         let col_ptr = col_ptr_u32(pattern)?;
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, pattern.col_idx());
-        let params = CholeskySymbolicParams {
+        let mut params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold(self.supernodal_threshold),
             ..Default::default()
         };
+        if let Some(relax) = &self.relax {
+            params.supernodal_params.relax = Some(relax);
+        }
         let symbolic = match self.ordering {
             FillOrdering::Amd => {
                 factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Amd, params)
@@ -216,7 +255,10 @@ impl CholeskyCore {
         ]);
         let mem = MemBuffer::try_new(req)
             .map_err(|_| SolveError::Other("out of memory for faer scratch".into()))?;
-        let l_values = vec![0.0; symbolic.len_val()];
+        let mut l_values = vec![0.0; symbolic.len_val()];
+        if self.huge_pages {
+            advise_huge_pages(&mut l_values);
+        }
         self.stats.factor_nnz = l_values.len();
         self.analysis = Some(CholAnalysis {
             pattern: pattern.clone(),
@@ -447,6 +489,25 @@ impl FaerCholesky {
         self.0.analysis = None;
         self
     }
+
+    /// Sets faer's supernode relaxation (amalgamation) thresholds: two adjacent
+    /// supernodes with `c` columns in total and a fraction `z` of explicit zeros after
+    /// merging are merged when `c <= relax[k].0 && z < relax[k].1` for some k. `None`
+    /// restores faer's defaults `[(4, 1.0), (16, 0.8), (48, 0.1), (usize::MAX, 0.05)]`.
+    /// Takes effect at the next analysis.
+    pub fn with_supernode_relaxation(mut self, relax: Option<Vec<(usize, f64)>>) -> Self {
+        self.0.relax = relax;
+        self.0.analysis = None;
+        self
+    }
+
+    /// Whether to ask Linux for transparent huge pages for the factor (default `true`).
+    /// Takes effect at the next analysis.
+    pub fn with_huge_pages(mut self, on: bool) -> Self {
+        self.0.huge_pages = on;
+        self.0.analysis = None;
+        self
+    }
 }
 
 impl Default for FaerLdlt {
@@ -488,6 +549,25 @@ impl FaerLdlt {
     /// the sequential run). Takes effect at the next analysis.
     pub fn with_threads(mut self, threads: usize) -> Self {
         self.0.threads = threads.max(1);
+        self.0.analysis = None;
+        self
+    }
+
+    /// Sets faer's supernode relaxation (amalgamation) thresholds: two adjacent
+    /// supernodes with `c` columns in total and a fraction `z` of explicit zeros after
+    /// merging are merged when `c <= relax[k].0 && z < relax[k].1` for some k. `None`
+    /// restores faer's defaults `[(4, 1.0), (16, 0.8), (48, 0.1), (usize::MAX, 0.05)]`.
+    /// Takes effect at the next analysis.
+    pub fn with_supernode_relaxation(mut self, relax: Option<Vec<(usize, f64)>>) -> Self {
+        self.0.relax = relax;
+        self.0.analysis = None;
+        self
+    }
+
+    /// Whether to ask Linux for transparent huge pages for the factor (default `true`).
+    /// Takes effect at the next analysis.
+    pub fn with_huge_pages(mut self, on: bool) -> Self {
+        self.0.huge_pages = on;
         self.0.analysis = None;
         self
     }

@@ -46,6 +46,25 @@ pub fn dot(x: &[f64], y: &[f64]) -> f64 {
     partial.iter().sum()
 }
 
+/// Short dot product with four interleaved partial sums (a fixed order, so the result
+/// does not depend on the thread count), for the dense block kernels.
+#[inline]
+fn dot4(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for k in 0..4 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    let mut tail = 0.0;
+    for (x, y) in ra.iter().zip(rb) {
+        tail += x * y;
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
 /// How the coarse correction of [`Preconditioner::TwoLevel`] is combined with the
 /// block-Jacobi smoother.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -481,10 +500,7 @@ impl BlockJacobi {
                     let ri = i * (i + 1) / 2;
                     for j in 0..=i {
                         let rj = j * (j + 1) / 2;
-                        let mut s = l[ri + j];
-                        for k in 0..j {
-                            s -= l[ri + k] * l[rj + k];
-                        }
+                        let s = l[ri + j] - dot4(&l[ri..ri + j], &l[rj..rj + j]);
                         if j == i {
                             if s.is_nan() || s <= 0.0 {
                                 return Err(SolveError::NotPositiveDefinite {
@@ -534,11 +550,7 @@ impl BlockJacobi {
             // L y = r
             for i in 0..len {
                 let ri = i * (i + 1) / 2;
-                let mut s = x[i];
-                for k in 0..i {
-                    s -= l[ri + k] * x[k];
-                }
-                x[i] = s / l[ri + i];
+                x[i] = (x[i] - dot4(&l[ri..ri + i], &x[..i])) / l[ri + i];
             }
             // Lᵀ x = y
             for i in (0..len).rev() {

@@ -382,6 +382,10 @@ fn main() {
             }),
         ),
         (
+            "faer LLT split (METIS bisection, AMD halves), 2 threads",
+            Box::new(|| Box::new(FaerCholeskySplit::new())),
+        ),
+        (
             "faer LDLT, AMD, 1 thread",
             Box::new(|| Box::new(FaerLdlt::new())),
         ),

@@ -96,6 +96,7 @@ pub trait LinearBackend: Send {
 pub const BACKENDS: &[&str] = &[
     "faer-cholesky",
     "faer-cholesky-metis",
+    "faer-cholesky-split",
     "faer-ldlt",
     "faer-ldlt-metis",
     "faer-lu",
@@ -111,6 +112,7 @@ pub fn backend_from_name(name: &str) -> Result<Box<dyn LinearBackend>, String> {
         "faer-cholesky-metis" => Ok(Box::new(
             crate::faer_backend::FaerCholesky::new().with_ordering(FillOrdering::Metis),
         )),
+        "faer-cholesky-split" => Ok(Box::new(crate::split::FaerCholeskySplit::new())),
         "faer-ldlt" => Ok(Box::new(crate::faer_backend::FaerLdlt::new())),
         "faer-ldlt-metis" => Ok(Box::new(
             crate::faer_backend::FaerLdlt::new().with_ordering(FillOrdering::Metis),

@@ -74,12 +74,12 @@ enum Kind {
 }
 
 /// Symbolic analysis and buffers kept for one pattern.
-struct CholAnalysis {
+pub(crate) struct CholAnalysis {
     pattern: Arc<CsrPattern>,
     col_ptr: Vec<u32>,
-    symbolic: SymbolicCholesky<u32>,
-    l_values: Vec<f64>,
-    mem: MemBuffer,
+    pub(crate) symbolic: SymbolicCholesky<u32>,
+    pub(crate) l_values: Vec<f64>,
+    pub(crate) mem: MemBuffer,
     diag_pos: Vec<usize>,
     factored: bool,
     /// Values of the last successful factorization (to skip an identical one).
@@ -164,8 +164,10 @@ fn advise_huge_pages(buf: &mut [f64]) {
 }
 
 /// Shared implementation of the LLᵀ and LDLᵀ backends.
-struct CholeskyCore {
+pub(crate) struct CholeskyCore {
     kind: Kind,
+    /// A given fill-reducing permutation `(fwd, inv)`, overriding `ordering`.
+    pub(crate) custom_perm: Option<(Vec<u32>, Vec<u32>)>,
     ordering: FillOrdering,
     supernodal_threshold: f64,
     /// Threads given to faer's numeric kernels (1 = `Par::Seq`).
@@ -174,14 +176,23 @@ struct CholeskyCore {
     relax: Option<Vec<(usize, f64)>>,
     /// Ask the kernel for transparent huge pages for the factor values.
     huge_pages: bool,
-    analysis: Option<CholAnalysis>,
-    stats: SolverStats,
+    pub(crate) analysis: Option<CholAnalysis>,
+    pub(crate) stats: SolverStats,
 }
 
 impl CholeskyCore {
+    /// An LLᵀ core with a given permutation, always supernodal, sequential.
+    pub(crate) fn llt_with_perm(fwd: Vec<u32>, inv: Vec<u32>) -> Self {
+        let mut c = Self::new(Kind::Llt);
+        c.custom_perm = Some((fwd, inv));
+        c.supernodal_threshold = 0.0;
+        c
+    }
+
     fn new(kind: Kind) -> Self {
         Self {
             kind,
+            custom_perm: None,
             ordering: FillOrdering::Amd,
             supernodal_threshold: 1.0,
             threads: 1,
@@ -204,7 +215,7 @@ impl CholeskyCore {
         }
     }
 
-    fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError> {
+    pub(crate) fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError> {
         if self
             .analysis
             .as_ref()
@@ -224,12 +235,25 @@ impl CholeskyCore {
         if let Some(relax) = &self.relax {
             params.supernodal_params.relax = Some(relax);
         }
-        let symbolic = match self.ordering {
-            FillOrdering::Amd => {
+        let symbolic = match (&self.custom_perm, self.ordering) {
+            (Some((fwd, inv)), _) => {
+                if fwd.len() != n || inv.len() != n {
+                    return Err(SolveError::Other("permutation of the wrong length".into()));
+                }
+                let perm = PermRef::new_checked(fwd, inv, n);
+                factorize_symbolic_cholesky(
+                    sym,
+                    Side::Lower,
+                    SymmetricOrdering::Custom(perm),
+                    params,
+                )
+                .map_err(faer_err)?
+            }
+            (None, FillOrdering::Amd) => {
                 factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Amd, params)
                     .map_err(faer_err)?
             }
-            FillOrdering::Metis => {
+            (None, FillOrdering::Metis) => {
                 if n > i32::MAX as usize {
                     return Err(SolveError::Other(format!(
                         "{n} unknowns: too many for METIS' 32-bit indices"
@@ -275,7 +299,7 @@ impl CholeskyCore {
         Ok(())
     }
 
-    fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
+    pub(crate) fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
         self.analyze(&a.pattern)?;
         let t = Instant::now();
         let kind = self.kind;

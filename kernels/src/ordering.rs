@@ -38,38 +38,13 @@ pub fn metis_nested_dissection(pattern: &CsrPattern) -> Result<(Vec<u32>, Vec<u3
     if n == 0 {
         return Ok((Vec::new(), Vec::new()));
     }
-    // group[v] = first unknown of vertex v; vertex_of[i] = vertex of unknown i
-    let mut first = Vec::with_capacity(n + 1);
-    let mut vertex_of = vec![0u32; n];
-    for (i, v) in vertex_of.iter_mut().enumerate() {
-        if i == 0 || pattern.row_cols(i) != pattern.row_cols(i - 1) {
-            first.push(i);
-        }
-        *v = (first.len() - 1) as u32;
-    }
-    first.push(n);
+    let NodeGraph {
+        first,
+        mut xadj,
+        mut adjncy,
+        mut vwgt,
+    } = node_graph(pattern)?;
     let nv = first.len() - 1;
-    // quotient graph without self loops; the columns of a row map to ascending vertices
-    let mut xadj: Vec<i32> = Vec::with_capacity(nv + 1);
-    let mut adjncy: Vec<i32> = Vec::new();
-    xadj.push(0);
-    for (v, &f) in first[..nv].iter().enumerate() {
-        let mut last = u32::MAX;
-        for &c in pattern.row_cols(f) {
-            let w = vertex_of[c as usize];
-            if w as usize != v && w != last {
-                adjncy.push(w as i32);
-                last = w;
-            }
-        }
-        if adjncy.len() >= i32::MAX as usize {
-            return Err(SolveError::Other(
-                "graph too large for METIS' 32-bit indices".into(),
-            ));
-        }
-        xadj.push(adjncy.len() as i32);
-    }
-    let mut vwgt: Vec<i32> = (0..nv).map(|v| (first[v + 1] - first[v]) as i32).collect();
     let mut perm = vec![0i32; nv];
     let mut iperm = vec![0i32; nv];
     if nv > 1 {
@@ -122,4 +97,105 @@ pub fn metis_nested_dissection(pattern: &CsrPattern) -> Result<(Vec<u32>, Vec<u3
         inv[old as usize] = new as u32;
     }
     Ok((fwd, inv))
+}
+
+/// The graph of the pattern with every run of consecutive unknowns with identical rows
+/// merged into one vertex: `first[v]..first[v + 1]` are the unknowns of vertex v; CSR
+/// adjacency without self loops (METIS' `xadj`/`adjncy`), vertex weights = run lengths.
+pub(crate) struct NodeGraph {
+    pub first: Vec<usize>,
+    pub xadj: Vec<i32>,
+    pub adjncy: Vec<i32>,
+    pub vwgt: Vec<i32>,
+}
+
+pub(crate) fn node_graph(pattern: &CsrPattern) -> Result<NodeGraph, SolveError> {
+    let n = pattern.n();
+    // group[v] = first unknown of vertex v; vertex_of[i] = vertex of unknown i
+    let mut first = Vec::with_capacity(n + 1);
+    let mut vertex_of = vec![0u32; n];
+    for (i, v) in vertex_of.iter_mut().enumerate() {
+        if i == 0 || pattern.row_cols(i) != pattern.row_cols(i - 1) {
+            first.push(i);
+        }
+        *v = (first.len() - 1) as u32;
+    }
+    first.push(n);
+    let nv = first.len() - 1;
+    // quotient graph without self loops; the columns of a row map to ascending vertices
+    let mut xadj: Vec<i32> = Vec::with_capacity(nv + 1);
+    let mut adjncy: Vec<i32> = Vec::new();
+    xadj.push(0);
+    for (v, &f) in first[..nv].iter().enumerate() {
+        let mut last = u32::MAX;
+        for &c in pattern.row_cols(f) {
+            let w = vertex_of[c as usize];
+            if w as usize != v && w != last {
+                adjncy.push(w as i32);
+                last = w;
+            }
+        }
+        if adjncy.len() >= i32::MAX as usize {
+            return Err(SolveError::Other(
+                "graph too large for METIS' 32-bit indices".into(),
+            ));
+        }
+        xadj.push(adjncy.len() as i32);
+    }
+    let vwgt: Vec<i32> = (0..nv).map(|v| (first[v + 1] - first[v]) as i32).collect();
+    Ok(NodeGraph {
+        first,
+        xadj,
+        adjncy,
+        vwgt,
+    })
+}
+
+/// A vertex separator of the node graph by METIS (`METIS_ComputeVertexSeparator`):
+/// for each unknown 0 or 1 (the two parts) or 2 (the separator).
+pub(crate) fn metis_separator(pattern: &CsrPattern) -> Result<Vec<u8>, SolveError> {
+    let n = pattern.n();
+    if n < 2 {
+        return Err(SolveError::Other("too small to split".into()));
+    }
+    let mut g = node_graph(pattern)?;
+    let nv = g.first.len() - 1;
+    let mut part = vec![0i32; nv];
+    let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
+    let mut nvtxs = nv as i32;
+    let mut sepsize = 0i32;
+    let status = {
+        let _guard = METIS_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+        // SAFETY: array lengths as METIS expects (xadj nv + 1, adjncy xadj[nv], vwgt and
+        // part nv, options METIS_NOPTIONS); symmetric graph without self loops.
+        unsafe {
+            metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
+            options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
+            metis_sys::METIS_ComputeVertexSeparator(
+                &mut nvtxs,
+                g.xadj.as_mut_ptr(),
+                g.adjncy.as_mut_ptr(),
+                g.vwgt.as_mut_ptr(),
+                options.as_mut_ptr(),
+                &mut sepsize,
+                part.as_mut_ptr(),
+            )
+        }
+    };
+    if status != metis_sys::rstatus_et_METIS_OK {
+        return Err(SolveError::Other(format!(
+            "METIS_ComputeVertexSeparator failed with status {status}"
+        )));
+    }
+    let mut out = vec![0u8; n];
+    for v in 0..nv {
+        let p = part[v];
+        if !(0..=2).contains(&p) {
+            return Err(SolveError::Other(
+                "METIS returned an invalid partition".into(),
+            ));
+        }
+        out[g.first[v]..g.first[v + 1]].fill(p as u8);
+    }
+    Ok(out)
 }

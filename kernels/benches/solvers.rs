@@ -329,7 +329,7 @@ fn main() {
             "--no-time" => time = false,
             "--skip-pcg" => pcg = false,
             "--tune" => tune = val("--tune").parse().expect("--tune: rounds"),
-            "--bench" => {} // passed by `cargo bench`
+            "--bench" | "--fill" => {} // --bench: passed by `cargo bench`
             other => panic!("unknown argument {other}"),
         }
     }
@@ -349,6 +349,20 @@ fn main() {
         eprintln!("# wrote {}/elast2d_{n}.mtx and _rhs.mtx", dir.display());
     }
     if !time {
+        return;
+    }
+    if std::env::args().any(|a| a == "--fill") {
+        for ord in [FillOrdering::Metis, FillOrdering::Amd] {
+            let mut s = FaerCholeskySplit::new().with_ordering(ord);
+            let t = Instant::now();
+            s.analyze(&m.a.pattern).unwrap();
+            println!(
+                "split {ord:?}: nnz {:.2} M, analysis {:.3} s, split {}",
+                s.stats().factor_nnz as f64 / 1e6,
+                t.elapsed().as_secs_f64(),
+                s.is_split()
+            );
+        }
         return;
     }
     if tune > 0 {
@@ -382,8 +396,12 @@ fn main() {
             }),
         ),
         (
-            "faer LLT split (METIS bisection, AMD halves), 2 threads",
+            "faer LLT split (METIS bisection, METIS halves), 2 threads",
             Box::new(|| Box::new(FaerCholeskySplit::new())),
+        ),
+        (
+            "faer LLT split (METIS bisection, AMD halves), 2 threads",
+            Box::new(|| Box::new(FaerCholeskySplit::new().with_ordering(FillOrdering::Amd))),
         ),
         (
             "faer LDLT, AMD, 1 thread",

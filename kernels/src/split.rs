@@ -7,8 +7,8 @@
 //! backend runs them on two rayon tasks. With the unknowns split into interiors I₁, I₂
 //! and a separator S (no coupling between I₁ and I₂):
 //!
-//! * half k is the principal sub-matrix Kₖ = A\[Iₖ ∪ S, Iₖ ∪ S\], ordered by AMD on Iₖ
-//!   with S last, and factorized by faer: Kₖ = Lₖ Lₖᵀ, whose trailing block Lₖ,SS gives
+//! * half k is the principal sub-matrix Kₖ = A\[Iₖ ∪ S, Iₖ ∪ S\], ordered by METIS
+//!   nested dissection of Iₖ (or the global AMD order restricted to Iₖ) with S last, and factorized by faer: Kₖ = Lₖ Lₖᵀ, whose trailing block Lₖ,SS gives
 //!   Lₖ,SS Lₖ,SSᵀ = A_SS − A_SIₖ A_IₖIₖ⁻¹ A_IₖS;
 //! * the separator's Schur complement is C = L₁,SS L₁,SSᵀ + L₂,SS L₂,SSᵀ − A_SS (dense,
 //!   |S| × |S|; |S| ≈ 2·√n on a 2D mesh), factorized by a dense Cholesky;
@@ -25,7 +25,7 @@
 use crate::backend::{LinearBackend, SolveError, SolverStats};
 use crate::csr::{CsrMatrix, CsrPattern};
 use crate::faer_backend::{same_bits, CholeskyCore, FaerCholesky};
-use crate::ordering::metis_separator;
+use crate::ordering::{metis_separator, FillOrdering};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
 use faer::linalg::matmul::matmul;
@@ -52,7 +52,12 @@ struct Half {
 }
 
 impl Half {
-    fn new(a: &CsrPattern, interior: Vec<u32>, sep: &[u32]) -> Result<Self, SolveError> {
+    fn new(
+        a: &CsrPattern,
+        interior: Vec<u32>,
+        sep: &[u32],
+        global_rank: Option<&[u32]>,
+    ) -> Result<Self, SolveError> {
         let n_int = interior.len();
         let mut dofs = interior;
         dofs.extend_from_slice(sep);
@@ -84,8 +89,19 @@ impl Half {
             row_ptr.push(col_idx.len());
         }
         let pattern = Arc::new(CsrPattern::from_parts_unchecked(nl, row_ptr, col_idx));
-        // AMD on the interior block, then S in its order
-        let mut fwd = amd_order(&pattern, n_int)?;
+        // the interior block in the given order (global AMD restricted to this half, or
+        // METIS nested dissection of the half), then S in separator order
+        let mut fwd = match global_rank {
+            Some(rank) => {
+                let mut f: Vec<u32> = (0..n_int as u32).collect();
+                f.sort_by_key(|&l| rank[dofs[l as usize] as usize]);
+                f
+            }
+            None => {
+                let sub = sub_pattern(&pattern, n_int);
+                crate::ordering::metis_nested_dissection(&sub)?.0
+            }
+        };
         fwd.extend(n_int as u32..nl as u32);
         let mut inv = vec![0u32; nl];
         for (new, &old) in fwd.iter().enumerate() {
@@ -237,6 +253,22 @@ impl Half {
     }
 }
 
+/// The leading `m × m` block of a pattern.
+fn sub_pattern(pattern: &CsrPattern, m: usize) -> CsrPattern {
+    let mut rp = Vec::with_capacity(m + 1);
+    rp.push(0usize);
+    let mut ci = Vec::new();
+    for i in 0..m {
+        for &c in pattern.row_cols(i) {
+            if (c as usize) < m {
+                ci.push(c);
+            }
+        }
+        rp.push(ci.len());
+    }
+    CsrPattern::from_parts_unchecked(m, rp, ci)
+}
+
 /// AMD order of the leading `m × m` block of `pattern` (fwd\[new\] = old).
 fn amd_order(pattern: &CsrPattern, m: usize) -> Result<Vec<u32>, SolveError> {
     let mut rp = Vec::with_capacity(m + 1);
@@ -289,6 +321,7 @@ enum Inner {
 /// Sparse Cholesky LLᵀ on two threads through a METIS vertex bisection; see the module
 /// documentation. Name `faer-cholesky-split`.
 pub struct FaerCholeskySplit {
+    ordering: FillOrdering,
     inner: Inner,
     stats: SolverStats,
 }
@@ -303,6 +336,7 @@ impl FaerCholeskySplit {
     /// A backend with no analysis yet.
     pub fn new() -> Self {
         Self {
+            ordering: FillOrdering::Metis,
             inner: Inner::None,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
@@ -312,12 +346,21 @@ impl FaerCholeskySplit {
         }
     }
 
+    /// Ordering of the two halves (takes effect at the next analysis): METIS nested
+    /// dissection of each half (default; least fill) or the global AMD order restricted
+    /// to each half (cheaper analysis, about 10 % more fill on 2D meshes).
+    pub fn with_ordering(mut self, ordering: FillOrdering) -> Self {
+        self.ordering = ordering;
+        self.inner = Inner::None;
+        self
+    }
+
     /// `true` when the last analysis split the matrix (else one whole factorization).
     pub fn is_split(&self) -> bool {
         matches!(self.inner, Inner::Split(_))
     }
 
-    fn try_split(pattern: &Arc<CsrPattern>) -> Result<Split, SolveError> {
+    fn try_split(pattern: &Arc<CsrPattern>, ordering: FillOrdering) -> Result<Split, SolveError> {
         let part = metis_separator(pattern)?;
         let mut sets: [Vec<u32>; 3] = [Vec::new(), Vec::new(), Vec::new()];
         for (i, &p) in part.iter().enumerate() {
@@ -327,9 +370,20 @@ impl FaerCholeskySplit {
             return Err(SolveError::Other("empty part".into()));
         }
         let [i1, i2, sep] = sets;
+        let rank = match ordering {
+            FillOrdering::Amd => {
+                let fwd = amd_order(pattern, pattern.n())?;
+                let mut rank = vec![0u32; fwd.len()];
+                for (new, &old) in fwd.iter().enumerate() {
+                    rank[old as usize] = new as u32;
+                }
+                Some(rank)
+            }
+            FillOrdering::Metis => None,
+        };
         let (h1, h2) = rayon::join(
-            || Half::new(pattern, i1, &sep),
-            || Half::new(pattern, i2, &sep),
+            || Half::new(pattern, i1, &sep, rank.as_deref()),
+            || Half::new(pattern, i2, &sep, rank.as_deref()),
         );
         let (h1, h2) = (h1?, h2?);
         let ns = sep.len();
@@ -370,7 +424,7 @@ impl LinearBackend for FaerCholeskySplit {
         }
         self.inner = Inner::None;
         let t = Instant::now();
-        match Self::try_split(pattern) {
+        match Self::try_split(pattern, self.ordering) {
             Ok(s) => {
                 self.stats.factor_nnz = s
                     .halves

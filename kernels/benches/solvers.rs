@@ -9,7 +9,7 @@
 //!     [--write-mtx DIR] [--no-time] [--json FILE] [--skip-pcg]
 //! ```
 //! Prints a markdown table; times are the median over `--reps` runs, each run with a new
-//! backend (new symbolic analysis). `--write-mtx DIR` writes `elast2d_<n>.mtx` and
+//! backend (new symbolic analysis); PCG Jacobi and block-Jacobi (slow) run once. `--write-mtx DIR` writes `elast2d_<n>.mtx` and
 //! `elast2d_<n>_rhs.mtx` with dfem's Matrix Market writer; `--json FILE` appends one JSON
 //! line per measurement (the format of `benches/peers/bench_peers.py`).
 
@@ -433,14 +433,14 @@ fn main() {
             &m,
             "PCG Jacobi, rtol 1e-8",
             &|| base(),
-            reps.min(2),
+            1,
         ));
         let l2 = lists.clone();
         rows_iter.push(iterative(
             &m,
             &format!("PCG block-Jacobi ({patch}×{patch}-node patches), rtol 1e-8"),
             &move || base().with_preconditioner(Preconditioner::BlockJacobi { blocks: l2.clone() }),
-            reps,
+            1,
         ));
         for (name, corr) in [
             ("additive", CoarseCorrection::Additive),

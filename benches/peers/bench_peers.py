@@ -5,7 +5,7 @@ line per measurement to --out (the format that kernels/benches/solvers.rs writes
 usage: python bench_peers.py --matrix DIR/elast2d_353 [--reps 3] [--out results.jsonl]
 reads DIR/elast2d_353.mtx (symmetric, lower triangle) and DIR/elast2d_353_rhs.mtx.
 
-Measured (median of --reps runs, each from scratch: analysis + factorization + solve):
+Measured (median and best of --reps runs, each from scratch: analysis + factorization + solve):
   MKL PARDISO (pypardiso), SPD Cholesky (mtype 2, upper triangle)
   MUMPS 5.5 sequential (python-mumps), symmetric LDLT, ordering auto and amd
   CHOLMOD (scikit-sparse 0.4.16), supernodal, plus refactorization with the same pattern
@@ -38,6 +38,7 @@ def main():
     ap.add_argument("--matrix", required=True)
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--out", default="results.jsonl")
+    ap.add_argument("--label", default="", help="appended to every method name")
     args = ap.parse_args()
     name = args.matrix.rstrip("/").split("/")[-1]
 
@@ -56,10 +57,11 @@ def main():
 
     def report(tool, method, runs, **extra):
         """runs: list of dicts of phase times (s); the median of each key is reported."""
-        d = dict(tool=tool, matrix=name, method=method, kind="direct", reps=len(runs))
+        d = dict(tool=tool, matrix=name, method=method + args.label, kind="direct", reps=len(runs))
         for k in runs[0]:
             if k != "relres":
                 d[k] = statistics.median(r[k] for r in runs)
+        d["factor_solve_best_s"] = min(r["factor_solve_s"] for r in runs)
         d["relres"] = runs[-1]["relres"]
         d.update(extra)
         line = json.dumps(d)

@@ -10,7 +10,7 @@
 #   PEERS_VENV   venv directory            (default: ~/.cache/dfem-peers-venv)
 #   PEERS_OUT    matrices and results      (default: /tmp/dfem-peers)
 #   PEERS_N      grid size n (n × n squares; 353 → 249,924 unknowns)  (default: 353)
-#   PEERS_REPS   repetitions per solver, the median is reported          (default: 3)
+#   PEERS_REPS   repetitions per solver; median and best are reported    (default: 3)
 #   CARGO_TARGET_DIR is passed through to cargo.
 set -euo pipefail
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -56,8 +56,16 @@ for l in sys.stdin:
     fi
     rm -f "$OUT/results.jsonl"
     echo "# load before the timed part: $(cut -d' ' -f1-3 /proc/loadavg)"
-    (cd "$OUT" && "$VENV/bin/python" "$HERE/bench_peers.py" --matrix "$OUT/$name" --reps "$REPS" --out "$OUT/results.jsonl")
+    # the peers with their libraries' default threading (MKL, OpenBLAS: all cores) ...
+    (cd "$OUT" && "$VENV/bin/python" "$HERE/bench_peers.py" --matrix "$OUT/$name" --reps "$REPS" \
+        --out "$OUT/results.jsonl" --label " [BLAS: default threads]")
+    echo "# load: $(cut -d' ' -f1-3 /proc/loadavg)"
     "$bench" --n "$N" --reps "$REPS" --json "$OUT/results.jsonl" | tee "$OUT/dfem_table.md"
+    echo "# load: $(cut -d' ' -f1-3 /proc/loadavg)"
+    # ... and with one BLAS thread (threaded BLAS suffers most when the machine is shared)
+    (cd "$OUT" && OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
+        "$VENV/bin/python" "$HERE/bench_peers.py" --matrix "$OUT/$name" --reps "$REPS" \
+        --out "$OUT/results.jsonl" --label " [BLAS: 1 thread]")
     echo "# load after: $(cut -d' ' -f1-3 /proc/loadavg)"
     "$VENV/bin/python" "$HERE/compare.py" "$OUT/results.jsonl"
 }

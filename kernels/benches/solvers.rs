@@ -5,8 +5,9 @@
 //! 3.49 M stored entries) — the same matrix as `peers/gen_matrix.py`.
 //!
 //! ```text
-//! cargo bench -p dfem-kernels --bench solvers -- [--n 353] [--reps 3] [--patch 6]
-//!     [--write-mtx DIR] [--no-time] [--json FILE] [--skip-pcg]
+//! cargo bench -p dfem-kernels --bench solvers -- [--n 353] [--reps 3] [--patch 4]
+//!     [--write-mtx DIR] [--no-time] [--json FILE] [--skip-pcg] [--two-level-only]
+//!     [--tune ROUNDS] [--fill]
 //! ```
 //! Prints a markdown table; times are the median over `--reps` runs, each run with a new
 //! backend (new symbolic analysis); PCG Jacobi and block-Jacobi (slow) run once. `--write-mtx DIR` writes `elast2d_<n>.mtx` and
@@ -312,12 +313,14 @@ fn json_line(r: &Row, n: usize, direct: bool) -> String {
 fn main() {
     let mut n = 353usize;
     let mut reps = 3usize;
-    let mut patch = 6usize;
+    let mut patch = 4usize;
     let mut write_dir: Option<String> = None;
     let mut json: Option<String> = None;
     let mut time = true;
     let mut pcg = true;
     let mut tune = 0usize;
+    let mut direct_on = true;
+    let mut one_level = true;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut val = |what: &str| {
@@ -332,6 +335,10 @@ fn main() {
             "--json" => json = Some(val("--json")),
             "--no-time" => time = false,
             "--skip-pcg" => pcg = false,
+            "--two-level-only" => {
+                direct_on = false;
+                one_level = false;
+            }
             "--tune" => tune = val("--tune").parse().expect("--tune: rounds"),
             "--bench" | "--fill" => {} // --bench: passed by `cargo bench`
             other => panic!("unknown argument {other}"),
@@ -412,7 +419,7 @@ fn main() {
             Box::new(|| Box::new(FaerLdlt::new())),
         ),
     ];
-    for (label, make) in &variants {
+    for (label, make) in variants.iter().filter(|_| direct_on) {
         match direct(&m, label, make.as_ref(), reps) {
             Ok(r) => rows_direct.push(r),
             Err(e) => eprintln!("{label}: {e}"),
@@ -433,19 +440,18 @@ fn main() {
         let tol = 1e-8;
         let max_it = 20_000;
         let base = move || Pcg::new().with_tolerance(tol).with_max_iterations(max_it);
-        rows_iter.push(iterative(
-            &m,
-            "PCG Jacobi, rtol 1e-8",
-            &|| base(),
-            1,
-        ));
-        let l2 = lists.clone();
-        rows_iter.push(iterative(
-            &m,
-            &format!("PCG block-Jacobi ({patch}×{patch}-node patches), rtol 1e-8"),
-            &move || base().with_preconditioner(Preconditioner::BlockJacobi { blocks: l2.clone() }),
-            1,
-        ));
+        if one_level {
+            rows_iter.push(iterative(&m, "PCG Jacobi, rtol 1e-8", &|| base(), 1));
+            let l2 = lists.clone();
+            rows_iter.push(iterative(
+                &m,
+                &format!("PCG block-Jacobi ({patch}×{patch}-node patches), rtol 1e-8"),
+                &move || {
+                    base().with_preconditioner(Preconditioner::BlockJacobi { blocks: l2.clone() })
+                },
+                1,
+            ));
+        }
         for (name, corr) in [
             ("additive", CoarseCorrection::Additive),
             ("balanced", CoarseCorrection::Balanced),

@@ -20,7 +20,9 @@
 //! dense steps run on one thread, so the result does not depend on the thread count.
 //! When a split is not possible (tiny or disconnected matrix, empty separator or part,
 //! or faer reorders S away from the end) the backend factorizes the whole matrix with
-//! one [`FaerCholesky`] instead. `min_pivot_ratio` is not computed (NaN).
+//! one [`FaerCholesky`] instead. `min_pivot_ratio` is not computed (NaN). A non-positive
+//! pivot inside a half is reported at its unknown; one in the separator's dense Schur
+//! complement at the first separator unknown, with `pivot` NaN.
 
 use crate::backend::{LinearBackend, SolveError, SolverStats};
 use crate::csr::{CsrMatrix, CsrPattern};

@@ -1,11 +1,17 @@
 //! Direct solvers on faer's sparse factorizations: [`FaerCholesky`] (LLᵀ),
 //! [`FaerLdlt`] (LDLᵀ without pivoting) and [`FaerLu`] (LU with partial pivoting).
 //!
-//! All of them keep the symbolic analysis (AMD ordering, elimination tree, supernodes),
+//! All of them keep the symbolic analysis (fill-reducing ordering — AMD by default, METIS
+//! nested dissection on request for the Cholesky backends —, elimination tree, supernodes),
 //! the factor value buffer and the scratch memory for as long as the pattern id does not
-//! change, and they factorize and solve with `Par::Seq`: faer's sparse factorizations
-//! gain nothing from a second thread on 2D problems, and sequential runs give the same
-//! bits for any rayon pool size.
+//! change. By default they factorize and solve with `Par::Seq`: faer's sparse
+//! factorizations gain little from a second thread on 2D problems, and sequential runs
+//! give the same bits for any rayon pool size. `with_threads(k)` on the Cholesky backends
+//! passes `Par::rayon(k)` to faer's dense supernode kernels instead (not bit-identical to
+//! the sequential run).
+//!
+//! `factorize` with values bit-identical to those of the last successful factorization of
+//! the same pattern returns at once (counted in `SolverStats::skipped_factorizations`).
 //!
 //! The symmetric CSR matrix is passed to faer as a compressed-sparse-column view of the
 //! same arrays (a structurally symmetric CSR is its own CSC); with `Side::Lower` faer
@@ -13,9 +19,11 @@
 
 use crate::backend::{LinearBackend, SolveError, SolverStats};
 use crate::csr::{CsrMatrix, CsrPattern};
+use crate::ordering::{metis_nested_dissection, FillOrdering};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
+use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
@@ -40,6 +48,11 @@ fn col_ptr_u32(p: &CsrPattern) -> Result<Vec<u32>, SolveError> {
     Ok(p.row_ptr().iter().map(|&x| x as u32).collect())
 }
 
+/// `true` when both slices have the same length and bit-identical entries.
+pub(crate) fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
 fn faer_err(e: impl std::fmt::Debug) -> SolveError {
     SolveError::Other(format!("faer: {e:?}"))
 }
@@ -61,14 +74,16 @@ enum Kind {
 }
 
 /// Symbolic analysis and buffers kept for one pattern.
-struct CholAnalysis {
+pub(crate) struct CholAnalysis {
     pattern: Arc<CsrPattern>,
     col_ptr: Vec<u32>,
-    symbolic: SymbolicCholesky<u32>,
-    l_values: Vec<f64>,
-    mem: MemBuffer,
+    pub(crate) symbolic: SymbolicCholesky<u32>,
+    pub(crate) l_values: Vec<f64>,
+    pub(crate) mem: MemBuffer,
     diag_pos: Vec<usize>,
     factored: bool,
+    /// Values of the last successful factorization (to skip an identical one).
+    last_values: Vec<f64>,
 }
 
 impl CholAnalysis {
@@ -118,28 +133,89 @@ impl CholAnalysis {
     }
 }
 
+/// Asks Linux for transparent huge pages on the (not yet touched) buffer: the first
+/// factorization then takes a few hundred page faults instead of one per 4 KiB, and the
+/// factorization runs with fewer TLB misses. A hint only: errors are ignored, and other
+/// systems do nothing.
+#[allow(unused_variables)]
+fn advise_huge_pages(buf: &mut [f64]) {
+    #[cfg(target_os = "linux")]
+    {
+        const HUGE: usize = 2 << 20;
+        let bytes = std::mem::size_of_val(buf);
+        if bytes < 2 * HUGE {
+            return;
+        }
+        let start = buf.as_mut_ptr() as usize;
+        let aligned = start.next_multiple_of(HUGE);
+        let end = (start + bytes) / HUGE * HUGE;
+        if end > aligned {
+            // SAFETY: the range lies inside `buf`, which we borrow mutably; MADV_HUGEPAGE
+            // changes no content, only how the pages are backed.
+            unsafe {
+                libc::madvise(
+                    aligned as *mut libc::c_void,
+                    end - aligned,
+                    libc::MADV_HUGEPAGE,
+                );
+            }
+        }
+    }
+}
+
 /// Shared implementation of the LLᵀ and LDLᵀ backends.
-struct CholeskyCore {
+pub(crate) struct CholeskyCore {
     kind: Kind,
+    /// A given fill-reducing permutation `(fwd, inv)`, overriding `ordering`.
+    pub(crate) custom_perm: Option<(Vec<u32>, Vec<u32>)>,
+    ordering: FillOrdering,
     supernodal_threshold: f64,
-    analysis: Option<CholAnalysis>,
-    stats: SolverStats,
+    /// Threads given to faer's numeric kernels (1 = `Par::Seq`).
+    threads: usize,
+    /// faer's supernode relaxation thresholds (`None`: faer's defaults).
+    relax: Option<Vec<(usize, f64)>>,
+    /// Ask the kernel for transparent huge pages for the factor values.
+    huge_pages: bool,
+    pub(crate) analysis: Option<CholAnalysis>,
+    pub(crate) stats: SolverStats,
 }
 
 impl CholeskyCore {
+    /// An LLᵀ core with a given permutation, always supernodal, sequential.
+    pub(crate) fn llt_with_perm(fwd: Vec<u32>, inv: Vec<u32>) -> Self {
+        let mut c = Self::new(Kind::Llt);
+        c.custom_perm = Some((fwd, inv));
+        c.supernodal_threshold = 0.0;
+        c
+    }
+
     fn new(kind: Kind) -> Self {
         Self {
             kind,
+            custom_perm: None,
+            ordering: FillOrdering::Amd,
             supernodal_threshold: 1.0,
+            threads: 1,
+            relax: None,
+            huge_pages: true,
             analysis: None,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
+                last_true_residual: f64::NAN,
                 ..Default::default()
             },
         }
     }
 
-    fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError> {
+    fn par(&self) -> Par {
+        if self.threads <= 1 {
+            Par::Seq
+        } else {
+            Par::rayon(self.threads)
+        }
+    }
+
+    pub(crate) fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError> {
         if self
             .analysis
             .as_ref()
@@ -152,21 +228,61 @@ impl CholeskyCore {
         let n = pattern.n();
         let col_ptr = col_ptr_u32(pattern)?;
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, pattern.col_idx());
-        let params = CholeskySymbolicParams {
+        let mut params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold(self.supernodal_threshold),
             ..Default::default()
         };
-        let symbolic =
-            factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Amd, params)
-                .map_err(faer_err)?;
+        if let Some(relax) = &self.relax {
+            params.supernodal_params.relax = Some(relax);
+        }
+        let symbolic = match (&self.custom_perm, self.ordering) {
+            (Some((fwd, inv)), _) => {
+                if fwd.len() != n || inv.len() != n {
+                    return Err(SolveError::Other("permutation of the wrong length".into()));
+                }
+                let perm = PermRef::new_checked(fwd, inv, n);
+                factorize_symbolic_cholesky(
+                    sym,
+                    Side::Lower,
+                    SymmetricOrdering::Custom(perm),
+                    params,
+                )
+                .map_err(faer_err)?
+            }
+            (None, FillOrdering::Amd) => {
+                factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Amd, params)
+                    .map_err(faer_err)?
+            }
+            (None, FillOrdering::Metis) => {
+                if n > i32::MAX as usize {
+                    return Err(SolveError::Other(format!(
+                        "{n} unknowns: too many for METIS' 32-bit indices"
+                    )));
+                }
+                let t_order = Instant::now();
+                let (fwd, inv) = metis_nested_dissection(pattern)?;
+                self.stats.ordering_seconds += t_order.elapsed().as_secs_f64();
+                let perm = PermRef::new_checked(&fwd, &inv, n);
+                factorize_symbolic_cholesky(
+                    sym,
+                    Side::Lower,
+                    SymmetricOrdering::Custom(perm),
+                    params,
+                )
+                .map_err(faer_err)?
+            }
+        };
         let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+            symbolic.factorize_numeric_llt_scratch::<f64>(self.par(), Default::default()),
+            symbolic.factorize_numeric_ldlt_scratch::<f64>(self.par(), Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, self.par()),
         ]);
         let mem = MemBuffer::try_new(req)
             .map_err(|_| SolveError::Other("out of memory for faer scratch".into()))?;
-        let l_values = vec![0.0; symbolic.len_val()];
+        let mut l_values = vec![0.0; symbolic.len_val()];
+        if self.huge_pages {
+            advise_huge_pages(&mut l_values);
+        }
         self.stats.factor_nnz = l_values.len();
         self.analysis = Some(CholAnalysis {
             pattern: pattern.clone(),
@@ -176,24 +292,31 @@ impl CholeskyCore {
             mem,
             diag_pos: pattern.diagonal_positions(),
             factored: false,
+            last_values: Vec::new(),
         });
         self.stats.symbolic_factorizations += 1;
         self.stats.symbolic_seconds += t.elapsed().as_secs_f64();
         Ok(())
     }
 
-    fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
+    pub(crate) fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
         self.analyze(&a.pattern)?;
         let t = Instant::now();
         let kind = self.kind;
+        let par = self.par();
         let an = self.analysis.as_mut().expect("analyzed");
-        an.factored = false;
-        let n = an.pattern.n();
         if a.values.len() != an.pattern.nnz() {
+            an.factored = false;
             return Err(SolveError::Other(
                 "matrix values do not match the pattern".into(),
             ));
         }
+        if an.factored && same_bits(&a.values, &an.last_values) {
+            self.stats.skipped_factorizations += 1;
+            return Ok(());
+        }
+        an.factored = false;
+        let n = an.pattern.n();
         let sym =
             SymbolicSparseColMatRef::new_checked(n, n, &an.col_ptr, None, an.pattern.col_idx());
         let mat = SparseColMatRef::new(sym, &a.values);
@@ -205,7 +328,7 @@ impl CholeskyCore {
                     mat,
                     Side::Lower,
                     LltRegularization::default(),
-                    Par::Seq,
+                    par,
                     MemStack::new(&mut an.mem),
                     Default::default(),
                 )
@@ -218,7 +341,7 @@ impl CholeskyCore {
                     mat,
                     Side::Lower,
                     LdltRegularization::default(),
-                    Par::Seq,
+                    par,
                     MemStack::new(&mut an.mem),
                     Default::default(),
                 )
@@ -257,6 +380,8 @@ impl CholeskyCore {
                 }
                 self.stats.min_pivot_ratio = best.0;
                 self.stats.min_pivot_index = best.1;
+                an.last_values.clear();
+                an.last_values.extend_from_slice(&a.values);
                 an.factored = true;
                 Ok(())
             }
@@ -278,7 +403,7 @@ impl CholeskyCore {
                         mat,
                         Side::Lower,
                         LdltRegularization::default(),
-                        Par::Seq,
+                        par,
                         MemStack::new(&mut an.mem),
                         Default::default(),
                     )
@@ -299,6 +424,7 @@ impl CholeskyCore {
     }
 
     fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
+        let par = self.par();
         let an = match &mut self.analysis {
             Some(an) if an.factored => an,
             _ => {
@@ -316,13 +442,13 @@ impl CholeskyCore {
             Kind::Llt => LltRef::new(&an.symbolic, &an.l_values).solve_in_place_with_conj(
                 Conj::No,
                 x,
-                Par::Seq,
+                par,
                 stack,
             ),
             Kind::Ldlt => LdltRef::new(&an.symbolic, &an.l_values).solve_in_place_with_conj(
                 Conj::No,
                 x,
-                Par::Seq,
+                par,
                 stack,
             ),
         }
@@ -332,7 +458,8 @@ impl CholeskyCore {
     }
 }
 
-/// Sparse Cholesky LLᵀ (faer, AMD ordering, supernodal or simplicial chosen by faer).
+/// Sparse Cholesky LLᵀ (faer; AMD or METIS ordering, see [`FaerCholesky::with_ordering`];
+/// supernodal or simplicial chosen by faer).
 /// Fails with [`SolveError::NotPositiveDefinite`] on a non-positive pivot; after a
 /// success, `stats().min_pivot_ratio` = minᵢ L_ii² / a_ii.
 pub struct FaerCholesky(CholeskyCore);
@@ -363,6 +490,48 @@ impl FaerCholesky {
         self.0.analysis = None;
         self
     }
+
+    /// Sets the fill-reducing ordering (takes effect at the next analysis): AMD (default)
+    /// or METIS nested dissection; the backend's name gets a `-metis` suffix with METIS.
+    pub fn with_ordering(mut self, ordering: FillOrdering) -> Self {
+        self.0.ordering = ordering;
+        self.0.analysis = None;
+        self
+    }
+
+    /// The fill-reducing ordering in use.
+    pub fn ordering(&self) -> FillOrdering {
+        self.0.ordering
+    }
+
+    /// Number of threads for faer's numeric factorization and solve (default 1 =
+    /// sequential, bit-identical for any rayon pool; k > 1 passes `Par::rayon(k)`, which
+    /// parallelises inside the dense supernode kernels only and is not bit-identical to
+    /// the sequential run). Takes effect at the next analysis.
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.0.threads = threads.max(1);
+        self.0.analysis = None;
+        self
+    }
+
+    /// Sets faer's supernode relaxation (amalgamation) thresholds: two adjacent
+    /// supernodes with `c` columns in total and a fraction `z` of explicit zeros after
+    /// merging are merged when `c <= relax[k].0 && z < relax[k].1` for some k. `None`
+    /// restores faer's defaults `[(4, 1.0), (16, 0.8), (48, 0.1), (usize::MAX, 0.05)]`.
+    /// Takes effect at the next analysis.
+    pub fn with_supernode_relaxation(mut self, relax: Option<Vec<(usize, f64)>>) -> Self {
+        self.0.relax = relax;
+        self.0.analysis = None;
+        self
+    }
+
+    /// Whether to ask Linux for transparent huge pages for the factor (default `true`).
+    /// Takes effect at the next analysis.
+    pub fn with_huge_pages(mut self, on: bool) -> Self {
+        self.0.huge_pages = on;
+        self.0.analysis = None;
+        self
+    }
 }
 
 impl Default for FaerLdlt {
@@ -384,13 +553,58 @@ impl FaerLdlt {
         self.0.analysis = None;
         self
     }
+
+    /// Sets the fill-reducing ordering (takes effect at the next analysis): AMD (default)
+    /// or METIS nested dissection; the backend's name gets a `-metis` suffix with METIS.
+    pub fn with_ordering(mut self, ordering: FillOrdering) -> Self {
+        self.0.ordering = ordering;
+        self.0.analysis = None;
+        self
+    }
+
+    /// The fill-reducing ordering in use.
+    pub fn ordering(&self) -> FillOrdering {
+        self.0.ordering
+    }
+
+    /// Number of threads for faer's numeric factorization and solve (default 1 =
+    /// sequential, bit-identical for any rayon pool; k > 1 passes `Par::rayon(k)`, which
+    /// parallelises inside the dense supernode kernels only and is not bit-identical to
+    /// the sequential run). Takes effect at the next analysis.
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.0.threads = threads.max(1);
+        self.0.analysis = None;
+        self
+    }
+
+    /// Sets faer's supernode relaxation (amalgamation) thresholds: two adjacent
+    /// supernodes with `c` columns in total and a fraction `z` of explicit zeros after
+    /// merging are merged when `c <= relax[k].0 && z < relax[k].1` for some k. `None`
+    /// restores faer's defaults `[(4, 1.0), (16, 0.8), (48, 0.1), (usize::MAX, 0.05)]`.
+    /// Takes effect at the next analysis.
+    pub fn with_supernode_relaxation(mut self, relax: Option<Vec<(usize, f64)>>) -> Self {
+        self.0.relax = relax;
+        self.0.analysis = None;
+        self
+    }
+
+    /// Whether to ask Linux for transparent huge pages for the factor (default `true`).
+    /// Takes effect at the next analysis.
+    pub fn with_huge_pages(mut self, on: bool) -> Self {
+        self.0.huge_pages = on;
+        self.0.analysis = None;
+        self
+    }
 }
 
 macro_rules! chol_backend {
-    ($t:ty, $name:literal) => {
+    ($t:ty, $name:literal, $metis_name:literal) => {
         impl LinearBackend for $t {
             fn name(&self) -> &'static str {
-                $name
+                match self.0.ordering {
+                    FillOrdering::Amd => $name,
+                    FillOrdering::Metis => $metis_name,
+                }
             }
             fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError> {
                 self.0.analyze(pattern)
@@ -407,8 +621,8 @@ macro_rules! chol_backend {
         }
     };
 }
-chol_backend!(FaerCholesky, "faer-cholesky");
-chol_backend!(FaerLdlt, "faer-ldlt");
+chol_backend!(FaerCholesky, "faer-cholesky", "faer-cholesky-metis");
+chol_backend!(FaerLdlt, "faer-ldlt", "faer-ldlt-metis");
 
 struct LuAnalysis {
     pattern: Arc<CsrPattern>,
@@ -417,6 +631,8 @@ struct LuAnalysis {
     numeric: NumericLu<u32, f64>,
     mem: MemBuffer,
     factored: bool,
+    /// Values of the last successful factorization (to skip an identical one).
+    last_values: Vec<f64>,
 }
 
 /// Sparse LU with partial pivoting (faer, COLAMD column ordering); the symbolic analysis
@@ -443,6 +659,7 @@ impl FaerLu {
             analysis: None,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
+                last_true_residual: f64::NAN,
                 ..Default::default()
             },
         }
@@ -481,6 +698,7 @@ impl LinearBackend for FaerLu {
             numeric: NumericLu::new(),
             mem,
             factored: false,
+            last_values: Vec::new(),
         });
         self.stats.symbolic_factorizations += 1;
         self.stats.symbolic_seconds += t.elapsed().as_secs_f64();
@@ -491,12 +709,17 @@ impl LinearBackend for FaerLu {
         self.analyze(&a.pattern)?;
         let t = Instant::now();
         let an = self.analysis.as_mut().expect("analyzed");
-        an.factored = false;
         if a.values.len() != an.pattern.nnz() {
+            an.factored = false;
             return Err(SolveError::Other(
                 "matrix values do not match the pattern".into(),
             ));
         }
+        if an.factored && same_bits(&a.values, &an.last_values) {
+            self.stats.skipped_factorizations += 1;
+            return Ok(());
+        }
+        an.factored = false;
         let n = an.pattern.n();
         let sym =
             SymbolicSparseColMatRef::new_checked(n, n, &an.col_ptr, None, an.pattern.col_idx());
@@ -515,6 +738,8 @@ impl LinearBackend for FaerLu {
         self.stats.numeric_seconds += t.elapsed().as_secs_f64();
         match r {
             Ok(()) => {
+                an.last_values.clear();
+                an.last_values.extend_from_slice(&a.values);
                 an.factored = true;
                 Ok(())
             }

@@ -6,7 +6,10 @@
 //! * [`assembly`]: deterministic parallel assembly ([`AssemblyPlan`]).
 //! * [`backend`]: the [`LinearBackend`] trait and the registry [`backend_from_name`].
 //! * [`faer_backend`]: sparse Cholesky LLᵀ, LDLᵀ and LU on faer.
-//! * [`pcg`]: Jacobi-preconditioned conjugate gradients.
+//! * [`split`]: sparse Cholesky on two threads through a METIS vertex bisection.
+//! * [`pcg`]: preconditioned conjugate gradients (Jacobi, block-Jacobi, two-level with a
+//!   rigid-body coarse space).
+//! * [`ordering`]: fill-reducing orderings (AMD, METIS nested dissection).
 //! * [`mm`]: Matrix Market input and output.
 //!
 //! Determinism: assembly, `mul_vec` and PCG reductions use fixed chunking; the direct
@@ -17,10 +20,14 @@ pub mod backend;
 pub mod csr;
 pub mod faer_backend;
 pub mod mm;
+pub mod ordering;
 pub mod pcg;
+pub mod split;
 
 pub use assembly::{AssemblyPlan, Connectivity, CONSTRAINED};
 pub use backend::{backend_from_name, LinearBackend, SolveError, SolverStats, BACKENDS};
 pub use csr::{CsrMatrix, CsrPattern};
 pub use faer_backend::{FaerCholesky, FaerLdlt, FaerLu};
-pub use pcg::Pcg;
+pub use ordering::FillOrdering;
+pub use pcg::{BlockNodes2d, CoarseCorrection, CoarseSpace, Pcg, Preconditioner};
+pub use split::FaerCholeskySplit;

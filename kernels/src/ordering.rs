@@ -1,0 +1,201 @@
+//! Fill-reducing orderings for the sparse Cholesky backends: faer's AMD, or METIS nested
+//! dissection on the compressed (node) graph.
+//!
+//! Unknowns that belong to one mesh node (2 or 3 displacement components) have identical
+//! rows in the pattern. [`metis_nested_dissection`] merges every run of consecutive
+//! unknowns with identical rows into one graph vertex (weighted by the run length), orders
+//! that smaller graph with `METIS_NodeND`, and expands the vertex permutation back to the
+//! unknowns, keeping the unknowns of one vertex together and in their original order.
+
+use crate::backend::SolveError;
+use crate::csr::CsrPattern;
+use std::sync::Mutex;
+
+/// Which fill-reducing ordering the Cholesky backends compute in their symbolic phase.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FillOrdering {
+    /// Approximate minimum degree (faer's own), the default: cheap, good on small and
+    /// medium problems.
+    #[default]
+    Amd,
+    /// METIS nested dissection on the node graph (`METIS_NodeND`): less fill on large
+    /// 2D/3D meshes, a costlier analysis (paid once per pattern).
+    Metis,
+}
+
+/// Serialises the calls into METIS: its bundled GKlib keeps some global state, and the
+/// ordering is computed once per pattern, so the lock costs nothing measurable.
+static METIS_LOCK: Mutex<()> = Mutex::new(());
+
+/// A fill-reducing permutation of the unknowns of `pattern` by METIS nested dissection.
+///
+/// Returns `(fwd, inv)` with `fwd[new] = old` and `inv[old] = new` (faer's convention for
+/// `SymmetricOrdering::Custom`). Runs of consecutive unknowns with identical rows (the
+/// components of one node) become one weighted vertex of the graph given to METIS.
+/// Deterministic: METIS runs with its fixed default seed.
+pub fn metis_nested_dissection(pattern: &CsrPattern) -> Result<(Vec<u32>, Vec<u32>), SolveError> {
+    let n = pattern.n();
+    if n == 0 {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    let NodeGraph {
+        first,
+        mut xadj,
+        mut adjncy,
+        mut vwgt,
+    } = node_graph(pattern)?;
+    let nv = first.len() - 1;
+    let mut perm = vec![0i32; nv];
+    let mut iperm = vec![0i32; nv];
+    if nv > 1 {
+        let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
+        let mut nvtxs = nv as i32;
+        let status = {
+            let _guard = METIS_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+            // SAFETY: every array has the length METIS expects (xadj nv + 1, adjncy
+            // xadj[nv], vwgt/perm/iperm nv, options METIS_NOPTIONS), the graph is
+            // symmetric (the pattern is) and has no self loops; METIS only reads the
+            // inputs and writes perm/iperm.
+            unsafe {
+                metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
+                options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
+                metis_sys::METIS_NodeND(
+                    &mut nvtxs,
+                    xadj.as_mut_ptr(),
+                    adjncy.as_mut_ptr(),
+                    vwgt.as_mut_ptr(),
+                    options.as_mut_ptr(),
+                    perm.as_mut_ptr(),
+                    iperm.as_mut_ptr(),
+                )
+            }
+        };
+        if status != metis_sys::rstatus_et_METIS_OK {
+            return Err(SolveError::Other(format!(
+                "METIS_NodeND failed with status {status}"
+            )));
+        }
+    }
+    // METIS: perm[new vertex] = old vertex. Check it is a permutation before trusting it.
+    let mut seen = vec![false; nv];
+    for &p in &perm {
+        let p = p as usize;
+        if p >= nv || seen[p] {
+            return Err(SolveError::Other(
+                "METIS_NodeND returned an invalid permutation".into(),
+            ));
+        }
+        seen[p] = true;
+    }
+    let mut fwd = Vec::with_capacity(n);
+    for &v in &perm {
+        let v = v as usize;
+        fwd.extend(first[v] as u32..first[v + 1] as u32);
+    }
+    let mut inv = vec![0u32; n];
+    for (new, &old) in fwd.iter().enumerate() {
+        inv[old as usize] = new as u32;
+    }
+    Ok((fwd, inv))
+}
+
+/// The graph of the pattern with every run of consecutive unknowns with identical rows
+/// merged into one vertex: `first[v]..first[v + 1]` are the unknowns of vertex v; CSR
+/// adjacency without self loops (METIS' `xadj`/`adjncy`), vertex weights = run lengths.
+pub(crate) struct NodeGraph {
+    pub first: Vec<usize>,
+    pub xadj: Vec<i32>,
+    pub adjncy: Vec<i32>,
+    pub vwgt: Vec<i32>,
+}
+
+pub(crate) fn node_graph(pattern: &CsrPattern) -> Result<NodeGraph, SolveError> {
+    let n = pattern.n();
+    // group[v] = first unknown of vertex v; vertex_of[i] = vertex of unknown i
+    let mut first = Vec::with_capacity(n + 1);
+    let mut vertex_of = vec![0u32; n];
+    for (i, v) in vertex_of.iter_mut().enumerate() {
+        if i == 0 || pattern.row_cols(i) != pattern.row_cols(i - 1) {
+            first.push(i);
+        }
+        *v = (first.len() - 1) as u32;
+    }
+    first.push(n);
+    let nv = first.len() - 1;
+    // quotient graph without self loops; the columns of a row map to ascending vertices
+    let mut xadj: Vec<i32> = Vec::with_capacity(nv + 1);
+    let mut adjncy: Vec<i32> = Vec::new();
+    xadj.push(0);
+    for (v, &f) in first[..nv].iter().enumerate() {
+        let mut last = u32::MAX;
+        for &c in pattern.row_cols(f) {
+            let w = vertex_of[c as usize];
+            if w as usize != v && w != last {
+                adjncy.push(w as i32);
+                last = w;
+            }
+        }
+        if adjncy.len() >= i32::MAX as usize {
+            return Err(SolveError::Other(
+                "graph too large for METIS' 32-bit indices".into(),
+            ));
+        }
+        xadj.push(adjncy.len() as i32);
+    }
+    let vwgt: Vec<i32> = (0..nv).map(|v| (first[v + 1] - first[v]) as i32).collect();
+    Ok(NodeGraph {
+        first,
+        xadj,
+        adjncy,
+        vwgt,
+    })
+}
+
+/// A vertex separator of the node graph by METIS (`METIS_ComputeVertexSeparator`):
+/// for each unknown 0 or 1 (the two parts) or 2 (the separator).
+pub(crate) fn metis_separator(pattern: &CsrPattern) -> Result<Vec<u8>, SolveError> {
+    let n = pattern.n();
+    if n < 2 {
+        return Err(SolveError::Other("too small to split".into()));
+    }
+    let mut g = node_graph(pattern)?;
+    let nv = g.first.len() - 1;
+    let mut part = vec![0i32; nv];
+    let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
+    let mut nvtxs = nv as i32;
+    let mut sepsize = 0i32;
+    let status = {
+        let _guard = METIS_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+        // SAFETY: array lengths as METIS expects (xadj nv + 1, adjncy xadj[nv], vwgt and
+        // part nv, options METIS_NOPTIONS); symmetric graph without self loops.
+        unsafe {
+            metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
+            options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
+            metis_sys::METIS_ComputeVertexSeparator(
+                &mut nvtxs,
+                g.xadj.as_mut_ptr(),
+                g.adjncy.as_mut_ptr(),
+                g.vwgt.as_mut_ptr(),
+                options.as_mut_ptr(),
+                &mut sepsize,
+                part.as_mut_ptr(),
+            )
+        }
+    };
+    if status != metis_sys::rstatus_et_METIS_OK {
+        return Err(SolveError::Other(format!(
+            "METIS_ComputeVertexSeparator failed with status {status}"
+        )));
+    }
+    let mut out = vec![0u8; n];
+    for v in 0..nv {
+        let p = part[v];
+        if !(0..=2).contains(&p) {
+            return Err(SolveError::Other(
+                "METIS returned an invalid partition".into(),
+            ));
+        }
+        out[g.first[v]..g.first[v + 1]].fill(p as u8);
+    }
+    Ok(out)
+}

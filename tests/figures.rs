@@ -290,6 +290,12 @@ fn capacity_curve_ends_at_the_critical_load_factor() {
         deformed.contains(&format!("λ = {lambda:.4}")),
         "title with λ"
     );
+    // the failed wall's mechanism is outlined and counted in the legend
+    assert!(
+        deformed.matches("stroke=\"#C800A0\"").count() >= 2,
+        "mechanism outline"
+    );
+    assert!(!deformed.contains("mechanism (0 blocks)"));
     // and `dfem plot` redraws the curve from curve.csv
     let again = dir.join("again");
     ok(

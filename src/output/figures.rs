@@ -69,6 +69,9 @@ pub struct Deformed {
     pub title: String,
     /// One line: the status, the failure mode and λ.
     pub status: String,
+    /// Blocks that move in the failure mechanism (summary.json `failure.blocks` whose
+    /// motion is not "none"), by block number.
+    pub moving: Vec<u32>,
 }
 
 /// A contact as the figure draws it.
@@ -78,6 +81,37 @@ pub struct ContactMark {
     pub disp: [[f64; 2]; 2],
     /// 0 stick, 1 slip, 2 open.
     pub state: u8,
+}
+
+/// The blocks that move in the mechanism of a summary: `failure.blocks` name the free
+/// blocks, and `blocks` lists every free block in block order, so the k-th free block
+/// (not fixed) of the cells is the k-th entry of `blocks`.
+fn moving_blocks(summary: &serde_json::Value, cell_block: &[u32], cell_fixed: &[bool]) -> Vec<u32> {
+    let Some(failed) = summary["failure"]["blocks"].as_array() else {
+        return Vec::new();
+    };
+    let moving: std::collections::HashSet<&str> = failed
+        .iter()
+        .filter(|b| b["motion"].as_str().is_some_and(|m| m != "none"))
+        .filter_map(|b| b["name"].as_str())
+        .collect();
+    let mut free: Vec<u32> = cell_block
+        .iter()
+        .zip(cell_fixed)
+        .filter(|(_, &f)| !f)
+        .map(|(&b, _)| b)
+        .collect();
+    free.sort_unstable();
+    free.dedup();
+    let names = summary["blocks"]
+        .as_array()
+        .map(|v| v.as_slice())
+        .unwrap_or(&[]);
+    free.iter()
+        .zip(names)
+        .filter(|(_, n)| n["name"].as_str().is_some_and(|n| moving.contains(n)))
+        .map(|(&b, _)| b)
+        .collect()
 }
 
 /// The status line of a figure from a summary document.
@@ -103,7 +137,7 @@ impl Deformed {
                 cell_block.push(i as u32);
             }
         }
-        let cell_fixed = cell_block
+        let cell_fixed: Vec<bool> = cell_block
             .iter()
             .map(|&b| mesh.blocks[b as usize].dofs == BlockDofs::Fixed)
             .collect();
@@ -121,7 +155,9 @@ impl Deformed {
             })
             .collect();
         let summary = super::summary(scene, mesh, out);
+        let moving = moving_blocks(&summary, &cell_block, &cell_fixed);
         Deformed {
+            moving,
             points: mesh.nodes.clone(),
             disp: out.node_disp.clone(),
             cells,
@@ -155,8 +191,8 @@ impl Deformed {
             }
             Ok(a.to_vec())
         };
-        let cell_block = per_cell("block")?.iter().map(|&v| v as u32).collect();
-        let cell_fixed = per_cell("fixed")?.iter().map(|&v| v != 0.0).collect();
+        let cell_block: Vec<u32> = per_cell("block")?.iter().map(|&v| v as u32).collect();
+        let cell_fixed: Vec<bool> = per_cell("fixed")?.iter().map(|&v| v != 0.0).collect();
         let c = Vtu::read(&cf)?;
         let cpts = c.points(&cf)?;
         let cdisp = c.vectors("displacement_m", cpts.len(), &cf)?;
@@ -179,7 +215,9 @@ impl Deformed {
                 state: s as u8,
             })
             .collect();
+        let moving = moving_blocks(&summary, &cell_block, &cell_fixed);
         Ok(Deformed {
+            moving,
             points,
             disp,
             cells,
@@ -280,10 +318,7 @@ fn boundary_rings<'a>(cells: impl Iterator<Item = &'a [u32]>) -> Vec<Vec<u32>> {
         while next.get(&s).is_some_and(|v| !v.is_empty()) {
             let mut ring = vec![s];
             let mut at = s;
-            loop {
-                let Some(n) = next.get_mut(&at).and_then(|v| v.pop()) else {
-                    break;
-                };
+            while let Some(n) = next.get_mut(&at).and_then(|v| v.pop()) {
                 if n == s {
                     break;
                 }
@@ -399,7 +434,7 @@ pub fn deformed(path: &Path, fig: &Deformed, amp: Option<f64>, format: Format) -
 fn fmt_num(v: f64, range: f64) -> String {
     if v == 0.0 {
         "0".into()
-    } else if range >= 1e-2 && range < 1e4 {
+    } else if (1e-2..1e4).contains(&range) {
         let digits = (2.0 - range.log10().floor()).clamp(0.0, 6.0) as usize;
         format!("{v:.digits$}")
     } else {
@@ -564,8 +599,26 @@ fn draw_deformed<DB: DrawingBackend>(
                 .map(|r| PathElement::new(ring_pts(r, moved), edge.stroke_width(1)))
         }))
         .map_err(e)?;
+    // the blocks of the failure mechanism, outlined
+    let mech = RGBColor(200, 0, 160);
+    let moving: std::collections::HashSet<u32> = fig.moving.iter().copied().collect();
+    chart
+        .draw_series(
+            outlines
+                .iter()
+                .filter(|(b, _)| moving.contains(b))
+                .flat_map(|(_, rings)| {
+                    rings
+                        .iter()
+                        .map(|r| PathElement::new(ring_pts(r, moved), mech.stroke_width(3)))
+                }),
+        )
+        .map_err(e)?;
     // contacts: open red, slipping orange; sticking ones are not drawn
-    let radius = if fig.contacts.len() > 5000 { 2 } else { 3 };
+    // markers no larger than about a sixth of a block's size in pixels
+    let blocks = outlines.len().max(1) as f64;
+    let block_px = ((lay.plot.0 as f64 * lay.plot.1 as f64) / blocks).sqrt();
+    let radius = (block_px / 6.0).clamp(1.0, 3.0).round() as i32;
     let orange = RGBColor(255, 140, 0);
     let red = RGBColor(220, 20, 20);
     let at = |c: &ContactMark, i: usize| {
@@ -626,11 +679,18 @@ fn draw_deformed<DB: DrawingBackend>(
         ))
         .map_err(e)?;
     let font = ("sans-serif", 13).into_font();
-    let items: [(&str, ShapeStyle); 4] = [
-        ("open contact", red.filled()),
-        ("slipping contact", orange.filled()),
+    let count = |st: u8| fig.contacts.iter().filter(|c| c.state == st).count();
+    let (open_label, slip_label) = (
+        format!("open contact ({})", count(OPEN)),
+        format!("slipping contact ({})", count(SLIP)),
+    );
+    let mech_label = format!("mechanism ({} blocks)", fig.moving.len());
+    let items: [(&str, ShapeStyle); 5] = [
+        (&open_label, red.filled()),
+        (&slip_label, orange.filled()),
         ("fixed block", fixed_fill.filled()),
         ("initial position", grey.stroke_width(2)),
+        (&mech_label, mech.stroke_width(3)),
     ];
     for (i, (label, style)) in items.iter().enumerate() {
         let y = 10 + 20 * i as i32;
@@ -643,6 +703,9 @@ fn draw_deformed<DB: DrawingBackend>(
                 .draw(&Rectangle::new([(11, y + 2), (21, y + 12)], *style))
                 .map_err(e)?;
         } else {
+            if i == 4 && fig.moving.is_empty() {
+                continue;
+            }
             legend
                 .draw(&PathElement::new(vec![(8, y + 7), (24, y + 7)], *style))
                 .map_err(e)?;
@@ -851,6 +914,7 @@ mod tests {
             contacts: vec![],
             title: String::new(),
             status: String::new(),
+            moving: vec![],
         };
         // 5 % of 10 m = 0.5 m over 1 mm: 500
         assert_eq!(f.auto_amplification(), 500.0);

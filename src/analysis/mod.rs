@@ -1,7 +1,9 @@
 //! Analyses: the static driver (this module), later capacity and time integration.
 
 pub mod config;
+pub mod curve;
 pub mod mechanism;
+pub mod progress;
 pub mod statics;
 pub mod support;
 
@@ -61,6 +63,8 @@ pub struct Outcome {
     pub mechanism: Option<mechanism::Mechanism>,
     /// The final configuration (updated Lagrangian), when it differs from the mesh.
     pub current: Option<Mesh>,
+    /// Capacity: λ against the control block's displacement, per converged increment.
+    pub capacity_curve: Option<curve::Curve>,
 }
 
 /// Pivot ratio below which the factorization is taken as singular: a mechanism (METHOD.md
@@ -71,6 +75,17 @@ pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 
 /// Run the scene's analysis.
 pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Result<Outcome> {
+    run_with_progress(scene, mesh, backend, &mut progress::Silent)
+}
+
+/// Run the scene's analysis, telling `progress` how it goes (phases, iterations, converged
+/// increments). The results are those of [`run`].
+pub fn run_with_progress(
+    scene: &Scene,
+    mesh: &Mesh,
+    backend: &mut dyn LinearBackend,
+    progress: &mut dyn progress::Progress,
+) -> Result<Outcome> {
     if scene.analysis.kind != AnalysisType::Dynamic {
         // a free block that touches nothing at all is a modelling mistake (misplaced
         // coordinates, a tolerance too small), not a structure
@@ -101,7 +116,9 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
         }
     }
     match scene.analysis.kind {
-        AnalysisType::Static | AnalysisType::Capacity => statics::run(scene, mesh, backend),
+        AnalysisType::Static | AnalysisType::Capacity => {
+            statics::run_with_progress(scene, mesh, backend, progress)
+        }
         AnalysisType::Dynamic => Err(Error::new(
             "analysis type 'dynamic' is not available in this version",
         )

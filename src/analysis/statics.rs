@@ -8,6 +8,7 @@
 
 use super::config::{evaluate, Committed, Trial};
 use super::mechanism::{classify, Mechanism};
+use super::progress::{Increment, Progress};
 use super::{Outcome, Stats, Status};
 use crate::assembly::{loads, LocalStiffness, System};
 use crate::geometry::polygon::Point;
@@ -153,6 +154,22 @@ pub struct Driver<'a> {
     pub failure_mode: Option<Failure>,
     /// Prescribed translation applied so far, per block (m).
     presc_total: Vec<Point>,
+    /// Where progress is reported (none: silent), and the state of the report.
+    progress: Option<&'a mut dyn Progress>,
+    report: Report,
+}
+
+/// What the progress report needs between calls.
+#[derive(Debug, Clone, Default)]
+struct Report {
+    phase: &'static str,
+    /// Load factor of the phase per unit of the phase's factor.
+    scale: f64,
+    /// Converged increments of the phase so far.
+    increments: usize,
+    /// Iterations and relative residual of the last converged increment.
+    iterations: usize,
+    residual: f64,
 }
 
 /// The matrix whose factorization the main backend holds.
@@ -244,6 +261,8 @@ impl<'a> Driver<'a> {
             held: Held::Nothing,
             failure_mode: None,
             presc_total: vec![[0.0; 2]; mesh.blocks.len()],
+            progress: None,
+            report: Report::default(),
         })
     }
 
@@ -439,6 +458,9 @@ impl<'a> Driver<'a> {
             self.stats.iterations += 1;
             let r: Vec<f64> = f_ext.iter().zip(&trial.f_int).map(|(a, b)| a - b).collect();
             let rn = Self::norm(&r);
+            if let Some(p) = self.progress.as_deref_mut() {
+                p.iteration(it, rn / scale);
+            }
             if std::env::var_os("DFEM_TRACE").is_some() {
                 eprintln!(
                     "it {it} residual {:.3e} open {} slip {}",
@@ -470,6 +492,8 @@ impl<'a> Driver<'a> {
                             || prev_force[k][0].hypot(prev_force[k][1]) > negligible)
                 });
             if it > 0 && rn <= self.settings.tolerance * scale && !changed {
+                self.report.iterations = it;
+                self.report.residual = rn / scale;
                 return Ok(Ok(trial));
             }
             if rn < STALL_PROGRESS * best_rn {
@@ -647,6 +671,33 @@ impl<'a> Driver<'a> {
         self.stats.increments += 1;
     }
 
+    /// A phase starts: `name` for the progress report, `increments` planned (if known),
+    /// `scale` its load factor per unit of the phase's factor.
+    fn begin_phase(&mut self, name: &'static str, increments: Option<usize>, scale: f64) {
+        self.report = Report {
+            phase: name,
+            scale,
+            ..Report::default()
+        };
+        if let Some(p) = self.progress.as_deref_mut() {
+            p.phase(name, increments);
+        }
+    }
+
+    /// Report a converged increment at the phase's factor `factor`.
+    fn converged(&mut self, factor: f64) {
+        self.report.increments += 1;
+        if let Some(p) = self.progress.as_deref_mut() {
+            p.increment(&Increment {
+                phase: self.report.phase,
+                increment: self.report.increments,
+                load_factor: factor * self.report.scale,
+                iterations: self.report.iterations,
+                residual: self.report.residual,
+            });
+        }
+    }
+
     /// Run a phase from factor 0 to 1 in `steps` increments (cut when they fail).
     /// Returns the factor reached (1 when the phase completed).
     fn run_phase(&mut self, phase: &Phase, steps: usize) -> Result<(f64, Option<String>)> {
@@ -671,6 +722,7 @@ impl<'a> Driver<'a> {
                     let dq = trial.dq.clone();
                     self.commit(trial, &dq, &presc);
                     s = target;
+                    self.converged(s);
                 }
                 Err((why, dq)) => {
                     self.failure_mode = Some(dq);
@@ -720,6 +772,7 @@ impl<'a> Driver<'a> {
             load_factor,
             mechanism,
             current: Some(self.cur.clone()),
+            capacity_curve: None,
         }
     }
 }
@@ -733,8 +786,19 @@ fn describe(why: &IncrementFailure) -> String {
 
 /// Run a static or capacity analysis.
 pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Result<Outcome> {
+    run_with_progress(scene, mesh, backend, &mut super::progress::Silent)
+}
+
+/// [`run`], reporting phases, iterations and converged increments to `progress`.
+pub fn run_with_progress<'a>(
+    scene: &'a Scene,
+    mesh: &Mesh,
+    backend: &'a mut dyn LinearBackend,
+    progress: &'a mut dyn Progress,
+) -> Result<Outcome> {
     let start = Instant::now();
     let mut d = Driver::new(scene, mesh, backend)?;
+    d.progress = Some(progress);
     let steps = scene.analysis.load_steps;
     let g = scene.model.gravity;
     let gnorm = g[0].hypot(g[1]);
@@ -820,6 +884,7 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
         step: f_grav.clone(),
         presc_step: zero_presc.clone(),
     };
+    d.begin_phase("gravity", Some(steps), 1.0);
     let (s, why) = d.run_phase(&phase, steps)?;
     if let Some(why) = why {
         return Ok(fail(
@@ -843,6 +908,7 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
             step: vec![0.0; n],
             presc_step: presc,
         };
+        d.begin_phase("prescribed", Some(steps), 1.0);
         let (s, why) = d.run_phase(&phase, steps)?;
         if let Some(why) = why {
             return Ok(fail(
@@ -866,6 +932,7 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
                     step,
                     presc_step: zero_presc,
                 };
+                d.begin_phase("lateral", Some(steps), scene.analysis.lateral);
                 let (s, why) = d.run_phase(&phase, steps)?;
                 if let Some(why) = why {
                     return Ok(fail(
@@ -887,6 +954,21 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
             let mut last_fail: Option<String> = None;
             let mut upper = f64::INFINITY;
             let limit = 1e3;
+            d.begin_phase("capacity", None, 1.0);
+            let control = super::curve::control_block(mesh);
+            let curve_point = |d: &Driver, lambda: f64, block: usize| super::curve::CurvePoint {
+                load_factor: lambda,
+                displacement: super::curve::control_displacement(
+                    mesh,
+                    &d.cur,
+                    &d.committed.u,
+                    block,
+                ),
+            };
+            let mut curve: Vec<super::curve::CurvePoint> = control
+                .map(|b| curve_point(&d, 0.0, b))
+                .into_iter()
+                .collect();
             // Raise λ in increments; an increment that fails sets the upper bound and is
             // cut. A failure from a distant state is not proof of collapse (the path of
             // slips matters), so the upper bound is retried from the closer states and
@@ -913,6 +995,10 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
                         let dq = trial.dq.clone();
                         d.commit(trial, &dq, &zero_presc);
                         lambda = target;
+                        d.converged(lambda);
+                        if let Some(b) = control {
+                            curve.push(curve_point(&d, lambda, b));
+                        }
                         if lambda >= upper {
                             // the earlier failure was the path, not the structure
                             upper = f64::INFINITY;
@@ -929,8 +1015,14 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
                     }
                 }
             }
+            let curve = control.map(|control_block| super::curve::Curve {
+                control_block,
+                points: curve,
+            });
             if lambda > limit {
-                return Ok(finish(&mut d, Status::Stable, Some(lambda), None));
+                let mut out = finish(&mut d, Status::Stable, Some(lambda), None);
+                out.capacity_curve = curve;
+                return Ok(out);
             }
             let mut out = fail(
                 &mut d,
@@ -941,6 +1033,7 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
                 Some(lambda),
             );
             out.load_factor = Some(lambda);
+            out.capacity_curve = curve;
             Ok(out)
         }
         AnalysisType::Dynamic => unreachable!("the dynamic driver runs elsewhere"),

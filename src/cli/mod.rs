@@ -1,6 +1,9 @@
 //! The command line (INTERFACE.md, "Command line"). Depends on everything; nothing depends
 //! on it.
 
+mod progress;
+
+use crate::output::figures::Format;
 use crate::{analysis, mesh, output, scene, solve, Error, Result};
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
@@ -35,9 +38,34 @@ enum Command {
         /// Linear backend.
         #[arg(long, default_value = solve::DEFAULT)]
         solver: String,
-        /// Print nothing but errors.
+        /// Print nothing but errors (and the --log-json lines, when asked for).
         #[arg(long)]
         quiet: bool,
+        /// Do not draw the figures (DIR/figures/).
+        #[arg(long)]
+        no_plots: bool,
+        /// Displacement amplification of the deformed figure (default: automatic, the
+        /// largest displacement drawn as about 5 % of the model's size).
+        #[arg(long, value_name = "X")]
+        amplification: Option<f64>,
+        /// Print one JSON line per converged increment on stderr (phase, increment,
+        /// load_factor, iterations, residual, elapsed_s) instead of a progress bar.
+        #[arg(long)]
+        log_json: bool,
+    },
+    /// Draw the figures of a finished run again from the files in DIR.
+    Plot {
+        /// The directory `dfem run --out DIR` wrote.
+        dir: PathBuf,
+        /// Displacement amplification of the deformed figure (default: automatic).
+        #[arg(long, value_name = "X")]
+        amplification: Option<f64>,
+        /// Image format (default: both png and svg).
+        #[arg(long, value_parser = ["png", "svg"])]
+        format: Option<String>,
+        /// Where to write the figures (default: DIR/figures).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Parse, mesh and find contacts; print counts; no solve.
     Check {
@@ -95,6 +123,17 @@ fn threads(n: Option<usize>) -> Result<()> {
     Ok(())
 }
 
+fn check_amplification(a: Option<f64>) -> Result<()> {
+    match a {
+        Some(x) if !(x.is_finite() && x > 0.0) => Err(Error::new(format!(
+            "--amplification must be a positive number, not {x}"
+        ))
+        .place("option --amplification")
+        .fix("give for example --amplification 100, or leave it out for the automatic one")),
+        _ => Ok(()),
+    }
+}
+
 /// Read a scene from a file or a built-in example.
 pub fn read_scene(file: Option<&Path>, example: Option<&str>) -> Result<scene::Scene> {
     match (file, example) {
@@ -124,8 +163,13 @@ fn dispatch(cli: Cli) -> Result<()> {
             threads: n,
             solver,
             quiet,
+            no_plots,
+            amplification,
+            log_json,
         } => {
             threads(n)?;
+            check_amplification(amplification)?;
+            let mut prog = progress::CliProgress::new(quiet, log_json);
             let mut backend = solve::backend(&solver)?;
             let sc = read_scene(file.as_deref(), example.as_deref())?;
             if !quiet {
@@ -133,10 +177,28 @@ fn dispatch(cli: Cli) -> Result<()> {
                     eprintln!("warning: {w}");
                 }
             }
+            prog.stage("meshing");
             let m = mesh::build(&sc);
-            let outcome = analysis::run(&sc, &m, backend.as_mut())
+            let outcome = analysis::run_with_progress(&sc, &m, backend.as_mut(), &mut prog)
                 .map_err(|e| e.in_file(sc.file.as_deref().unwrap_or(Path::new("scene"))))?;
+            prog.stage("writing");
             output::write_all(&out, &sc, &m, &outcome)?;
+            if !no_plots {
+                prog.stage("figures");
+                output::write_figures(
+                    &out.join("figures"),
+                    &sc,
+                    &m,
+                    &outcome,
+                    amplification,
+                    &[Format::Png, Format::Svg],
+                )
+                .map_err(|mut e| {
+                    let fix = e.fix.take().unwrap_or_default();
+                    e.fix(format!("{fix} (the results are written: draw the figures later with `dfem plot DIR`, or run with --no-plots)"))
+                })?;
+            }
+            prog.finish();
             if !quiet {
                 match &outcome.status {
                     analysis::Status::Stable => println!(
@@ -150,6 +212,37 @@ fn dispatch(cli: Cli) -> Result<()> {
                         println!("failed: {reason}; results in {}", out.display())
                     }
                 }
+            }
+            Ok(())
+        }
+        Command::Plot {
+            dir,
+            amplification,
+            format,
+            out,
+        } => {
+            check_amplification(amplification)?;
+            let formats = match format.as_deref().and_then(Format::parse) {
+                Some(f) => vec![f],
+                None => vec![Format::Png, Format::Svg],
+            };
+            let fig = output::figures::Deformed::from_dir(&dir)?;
+            let curve = output::read::curve(&dir)?;
+            let summary = output::read::summary(&dir)?;
+            let control = summary["curve"]["control_block"]
+                .as_str()
+                .unwrap_or("control")
+                .to_string();
+            let fig_dir = out.unwrap_or_else(|| dir.join("figures"));
+            let written = output::figures::write_figures(
+                &fig_dir,
+                &fig,
+                curve.as_deref().map(|r| (r, control.as_str())),
+                amplification,
+                &formats,
+            )?;
+            for w in written {
+                println!("{}", w.display());
             }
             Ok(())
         }

@@ -2,7 +2,9 @@
 //! written to a temporary name in the same directory and renamed, so a reader never sees
 //! a half-written result.
 
+pub mod figures;
 pub mod plot;
+pub mod read;
 pub mod vtk;
 
 use crate::analysis::{outcome_motion, Outcome, Status};
@@ -89,7 +91,55 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "wall_time_s": s.wall_time_s,
         },
         "warnings": scene.warnings,
+        "curve": out.capacity_curve.as_ref().map(|c| json!({
+            "file": "curve.csv",
+            "control_block": scene.blocks[c.control_block].name,
+        })),
     })
+}
+
+/// The text of `curve.csv`: header `load_factor,ux_m,uy_m`, one row per converged state of
+/// the capacity search (the first one after gravity, at λ = 0).
+pub fn curve_csv(curve: &crate::analysis::curve::Curve) -> String {
+    let mut s = String::from("load_factor,ux_m,uy_m\n");
+    for p in &curve.points {
+        s.push_str(&format!(
+            "{},{:e},{:e}\n",
+            p.load_factor, p.displacement[0], p.displacement[1]
+        ));
+    }
+    s
+}
+
+/// Draw the default figures of a run into `dir` (deformed configuration; capacity curve
+/// for a capacity analysis) in each of `formats`; `amplification` `None`: automatic.
+pub fn write_figures(
+    dir: &Path,
+    scene: &Scene,
+    mesh: &Mesh,
+    out: &Outcome,
+    amplification: Option<f64>,
+    formats: &[figures::Format],
+) -> Result<Vec<std::path::PathBuf>> {
+    let fig = figures::Deformed::from_run(scene, mesh, out);
+    let rows: Option<Vec<[f64; 3]>> = out.capacity_curve.as_ref().map(|c| {
+        c.points
+            .iter()
+            .map(|p| [p.load_factor, p.displacement[0], p.displacement[1]])
+            .collect()
+    });
+    let control = out
+        .capacity_curve
+        .as_ref()
+        .map(|c| scene.blocks[c.control_block].name.as_str())
+        .unwrap_or("");
+    figures::write_figures(
+        dir,
+        &fig,
+        rows.as_deref().map(|r| (r, control)),
+        amplification,
+        formats,
+    )
 }
 
 /// Write every result of a run into `dir`.
@@ -102,6 +152,9 @@ pub fn write_all(dir: &Path, scene: &Scene, mesh: &Mesh, out: &Outcome) -> Resul
     if scene.output.vtk {
         vtk::write_step(dir, 0, 0.0, scene, mesh, out)?;
         vtk::write_pvd(dir, &[(0.0, 0)])?;
+    }
+    if let Some(c) = &out.capacity_curve {
+        write_atomic(&dir.join("curve.csv"), curve_csv(c).as_bytes())?;
     }
     let mut text =
         serde_json::to_string_pretty(&summary(scene, mesh, out)).expect("JSON of plain values");

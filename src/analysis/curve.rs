@@ -1,0 +1,57 @@
+//! The capacity curve: the load factor λ against the displacement of a control point, one
+//! point per converged increment of the capacity search (written to `curve.csv` and drawn
+//! as `figures/capacity_curve.*`).
+
+use crate::mesh::{BlockDofs, Mesh};
+
+/// One converged state of the capacity search.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurvePoint {
+    /// Load factor λ (lateral body force / weight).
+    pub load_factor: f64,
+    /// Displacement of the control block's centroid (m), total since the start.
+    pub displacement: [f64; 2],
+}
+
+/// The capacity curve of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Curve {
+    /// The control block: the top-most free block (highest centroid; the first in scene
+    /// order on ties).
+    pub control_block: usize,
+    /// From the state after gravity (λ = 0) to the last converged increment.
+    pub points: Vec<CurvePoint>,
+}
+
+/// The top-most free block (highest initial centroid; the first one on ties), if any.
+pub fn control_block(mesh: &Mesh) -> Option<usize> {
+    let mut best: Option<usize> = None;
+    for (i, b) in mesh.blocks.iter().enumerate() {
+        if b.dofs == BlockDofs::Fixed {
+            continue;
+        }
+        if best.is_none_or(|j| b.centroid[1] > mesh.blocks[j].centroid[1]) {
+            best = Some(i);
+        }
+    }
+    best
+}
+
+/// The control block's centroid displacement (m) in the configuration `cur` with total
+/// unknowns `u`, measured from the initial mesh `mesh0`.
+pub fn control_displacement(mesh0: &Mesh, cur: &Mesh, u: &[f64], block: usize) -> [f64; 2] {
+    if let BlockDofs::Rigid { first, .. } = mesh0.blocks[block].dofs {
+        let f = first as usize;
+        return [u[f], u[f + 1]];
+    }
+    let b = &mesh0.blocks[block];
+    let disp: Vec<[f64; 2]> = b
+        .nodes
+        .clone()
+        .map(|n| {
+            let (p, q) = (cur.nodes[n as usize], mesh0.nodes[n as usize]);
+            [p[0] - q[0], p[1] - q[1]]
+        })
+        .collect();
+    super::fit_motion(mesh0, block, &disp).0
+}

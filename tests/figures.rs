@@ -1,0 +1,352 @@
+//! What users see (docs/outputs.md): the figures `dfem run` draws into DIR/figures/, their
+//! redrawing by `dfem plot DIR`, `--no-plots`, the `--log-json` lines, the capacity curve
+//! (curve.csv and its figure) and the progress reports of the library.
+
+mod common;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn dfem(args: &[&str]) -> Output {
+    Command::new(common::dfem_bin())
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok(out: &Output, what: &str) {
+    assert!(
+        out.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
+
+/// A PNG of some substance: the signature and more than `kb` kB.
+fn check_png(path: &Path, kb: u64) {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(bytes[..8], PNG_SIGNATURE, "{}", path.display());
+    assert!(
+        bytes.len() as u64 > kb * 1024,
+        "{}: {} bytes",
+        path.display(),
+        bytes.len()
+    );
+}
+
+/// An SVG; returns its text.
+fn read_svg(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert!(text.contains("<svg"), "{}", path.display());
+    text
+}
+
+/// The wall example as a capacity analysis.
+fn wall_capacity() -> String {
+    let text = dfem::scene::examples::get("wall").unwrap();
+    assert!(text.contains("type = \"static\""));
+    text.replace("type = \"static\"", "type = \"capacity\"")
+}
+
+#[test]
+fn every_example_draws_its_figures_and_plot_redraws_them() {
+    for (name, _, text) in dfem::scene::examples::EXAMPLES {
+        let dir = common::tmp_dir(&format!("figures_{name}"));
+        let d = dir.to_str().unwrap();
+        ok(
+            &dfem(&["run", "--example", name, "--quiet", "--out", d]),
+            name,
+        );
+        let figs = dir.join("figures");
+        check_png(&figs.join("deformed.png"), 10);
+        let svg = read_svg(&figs.join("deformed.svg"));
+        // every block is filled: at least one polygon per block
+        let blocks = dfem::scene::parse_str(text, None).unwrap().blocks.len();
+        let polygons = svg.matches("<polygon").count();
+        assert!(
+            polygons >= blocks,
+            "{name}: {polygons} polygons, {blocks} blocks"
+        );
+        assert!(svg.contains("|u| (m)"), "{name}: colour bar");
+        // static examples draw no capacity curve
+        assert!(!figs.join("capacity_curve.png").exists(), "{name}");
+        // `dfem plot` reads the files back and draws the same figures
+        let again = dir.join("again");
+        let out = dfem(&["plot", d, "--out", again.to_str().unwrap()]);
+        ok(&out, name);
+        for f in ["deformed.png", "deformed.svg"] {
+            assert!(
+                std::fs::read(figs.join(f)).unwrap() == std::fs::read(again.join(f)).unwrap(),
+                "{name}: {f} differs when redrawn from the files"
+            );
+        }
+        // no temporary files left behind
+        for e in std::fs::read_dir(&figs).unwrap() {
+            let n = e.unwrap().file_name().into_string().unwrap();
+            assert!(!n.contains(".tmp"), "{name}: {n}");
+        }
+    }
+}
+
+#[test]
+fn no_plots_draws_nothing_and_plot_draws_later() {
+    let dir = common::tmp_dir("figures_no_plots");
+    let d = dir.to_str().unwrap();
+    ok(
+        &dfem(&[
+            "run",
+            "--example",
+            "arch",
+            "--quiet",
+            "--no-plots",
+            "--out",
+            d,
+        ]),
+        "run",
+    );
+    assert!(dir.join("summary.json").is_file());
+    assert!(!dir.join("figures").exists());
+    // one format, a given amplification, shown in the title
+    let out = dfem(&["plot", d, "--format", "svg", "--amplification", "123"]);
+    ok(&out, "plot");
+    let svg = read_svg(&dir.join("figures/deformed.svg"));
+    assert!(
+        svg.contains("× 123"),
+        "amplification missing from the title"
+    );
+    assert!(!dir.join("figures/deformed.png").exists());
+}
+
+#[test]
+fn plot_errors_name_the_file_and_the_fix() {
+    let dir = common::tmp_dir("figures_plot_errors");
+    let d = dir.to_str().unwrap();
+    let check = |out: Output, needle: &str| {
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains(needle), "'{needle}' missing from: {err}");
+        assert!(err.contains("fix:"), "{err}");
+        assert!(
+            !err.contains("panicked") && !err.contains("internal error"),
+            "{err}"
+        );
+    };
+    // an empty directory
+    check(dfem(&["plot", d]), "summary.json");
+    // a run without ParaView files
+    let scene = dir.join("novtk.toml");
+    let text = dfem::scene::examples::get("arch").unwrap();
+    std::fs::write(&scene, format!("{text}\n[output]\nvtk = false\n")).unwrap();
+    let run = dir.join("run");
+    ok(
+        &dfem(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--quiet",
+            "--no-plots",
+            "--out",
+            run.to_str().unwrap(),
+        ]),
+        "run",
+    );
+    check(dfem(&["plot", run.to_str().unwrap()]), "blocks_NNNN.vtu");
+    // a damaged result file
+    let run2 = dir.join("run2");
+    ok(
+        &dfem(&[
+            "run",
+            "--example",
+            "arch",
+            "--quiet",
+            "--no-plots",
+            "--out",
+            run2.to_str().unwrap(),
+        ]),
+        "run",
+    );
+    let vtu = run2.join("blocks_0000.vtu");
+    let t = std::fs::read_to_string(&vtu).unwrap();
+    std::fs::write(&vtu, t.replace("</DataArray>", "")).unwrap();
+    check(dfem(&["plot", run2.to_str().unwrap()]), "blocks_0000.vtu");
+    // a bad amplification
+    check(
+        dfem(&["plot", run2.to_str().unwrap(), "--amplification=0"]),
+        "--amplification",
+    );
+}
+
+#[test]
+fn log_json_prints_one_parsable_line_per_increment() {
+    let dir = common::tmp_dir("figures_log_json");
+    let out = dfem(&[
+        "run",
+        "--example",
+        "wall",
+        "--quiet",
+        "--no-plots",
+        "--log-json",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    ok(&out, "run");
+    let err = String::from_utf8(out.stderr).unwrap();
+    let lines: Vec<serde_json::Value> = err
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(
+        lines.len() as u64,
+        summary["stats"]["increments"].as_u64().unwrap(),
+        "one line per converged increment"
+    );
+    let mut prev_elapsed = 0.0;
+    for (k, v) in lines.iter().enumerate() {
+        assert_eq!(v["phase"], "gravity", "{v}");
+        assert_eq!(v["increment"].as_u64(), Some(k as u64 + 1), "{v}");
+        assert!(v["iterations"].as_u64().is_some(), "{v}");
+        let r = v["residual"].as_f64().unwrap();
+        assert!((0.0..=1e-6).contains(&r), "{v}");
+        let e = v["elapsed_s"].as_f64().unwrap();
+        assert!(e >= prev_elapsed, "{v}");
+        prev_elapsed = e;
+    }
+    // gravity in equal increments up to the full self-weight
+    assert_eq!(lines.last().unwrap()["load_factor"].as_f64(), Some(1.0));
+    assert!((lines[0]["load_factor"].as_f64().unwrap() - 1.0 / lines.len() as f64).abs() < 1e-12);
+}
+
+#[test]
+fn capacity_curve_ends_at_the_critical_load_factor() {
+    let dir = common::tmp_dir("figures_capacity");
+    let scene = dir.join("wall_capacity.toml");
+    std::fs::write(&scene, wall_capacity()).unwrap();
+    let run = dir.join("run");
+    let out = dfem(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "--log-json",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    ok(&out, "run");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    let lambda = summary["load_factor"].as_f64().unwrap();
+    assert!(lambda > 0.1, "{lambda}");
+    let csv = std::fs::read_to_string(run.join("curve.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("load_factor,ux_m,uy_m"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.len() >= 3, "{csv}");
+    assert_eq!(rows[0][0], 0.0, "the curve starts after gravity");
+    for w in rows.windows(2) {
+        assert!(w[1][0] > w[0][0], "λ increases: {csv}");
+    }
+    // (serde_json's default float parsing may differ from the exact value by an ulp)
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-14 * b.abs();
+    let last = rows.last().unwrap()[0];
+    assert!(
+        same(last, lambda),
+        "last λ of the curve {last} against {lambda}"
+    );
+    // the control block (top of the wall) moves with the lateral force (+x)
+    assert!(rows.last().unwrap()[1] > rows[0][1] + 1e-7, "{csv}");
+    let control = summary["curve"]["control_block"].as_str().unwrap();
+    assert!(summary["blocks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|b| b["name"] == control));
+    assert_eq!(summary["curve"]["file"], "curve.csv");
+    // the capacity log lines: λ of each converged increment, the last one λ_c
+    let err = String::from_utf8(out.stderr).unwrap();
+    let cap: Vec<serde_json::Value> = err
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter(|v| v["phase"] == "capacity")
+        .collect();
+    assert_eq!(cap.len(), rows.len() - 1);
+    assert!(same(
+        cap.last().unwrap()["load_factor"].as_f64().unwrap(),
+        lambda
+    ));
+    // figures: the deformed shape shows open contacts (red) and the curve is drawn
+    let figs = run.join("figures");
+    check_png(&figs.join("capacity_curve.png"), 10);
+    let svg = read_svg(&figs.join("capacity_curve.svg"));
+    assert!(svg.contains("λ = "), "legend with the critical λ");
+    let deformed = read_svg(&figs.join("deformed.svg"));
+    assert!(
+        deformed.matches("fill=\"#DC1414\"").count() > 1,
+        "open contacts"
+    );
+    assert!(
+        deformed.contains(&format!("λ = {lambda:.4}")),
+        "title with λ"
+    );
+    // the failed wall's mechanism is outlined and counted in the legend
+    assert!(
+        deformed.matches("stroke=\"#C800A0\"").count() >= 2,
+        "mechanism outline"
+    );
+    assert!(!deformed.contains("mechanism (0 blocks)"));
+    // and `dfem plot` redraws the curve from curve.csv
+    let again = dir.join("again");
+    ok(
+        &dfem(&[
+            "plot",
+            run.to_str().unwrap(),
+            "--out",
+            again.to_str().unwrap(),
+        ]),
+        "plot",
+    );
+    for f in ["capacity_curve.png", "capacity_curve.svg"] {
+        assert!(
+            std::fs::read(figs.join(f)).unwrap() == std::fs::read(again.join(f)).unwrap(),
+            "{f} differs when redrawn"
+        );
+    }
+}
+
+#[test]
+fn progress_reports_do_not_change_the_results() {
+    use dfem::analysis::progress::Recorder;
+    let sc = common::scene(&wall_capacity());
+    let m = dfem::mesh::build(&sc);
+    let (_, silent) = common::solve(&sc);
+    let mut rec = Recorder::default();
+    let mut backend = dfem::solve::backend(dfem::solve::DEFAULT).unwrap();
+    let out = dfem::analysis::run_with_progress(&sc, &m, backend.as_mut(), &mut rec).unwrap();
+    assert_eq!(out.u, silent.u);
+    assert_eq!(out.load_factor, silent.load_factor);
+    assert_eq!(out.capacity_curve, silent.capacity_curve);
+    let phases: Vec<&str> = rec.phases.iter().map(|p| p.0.as_str()).collect();
+    assert_eq!(phases, ["gravity", "capacity"]);
+    assert_eq!(rec.phases[0].1, Some(sc.analysis.load_steps));
+    assert_eq!(rec.increments.len(), out.stats.increments);
+    assert_eq!(rec.iterations, out.stats.iterations);
+    let curve = out.capacity_curve.unwrap();
+    let lambdas: Vec<f64> = rec
+        .increments
+        .iter()
+        .filter(|i| i.0 == "capacity")
+        .map(|i| i.2)
+        .collect();
+    let from_curve: Vec<f64> = curve.points[1..].iter().map(|p| p.load_factor).collect();
+    assert_eq!(lambdas, from_curve);
+    // the control block is the top-most free block
+    let top = m
+        .blocks
+        .iter()
+        .filter(|b| b.dofs != dfem::mesh::BlockDofs::Fixed)
+        .map(|b| b.centroid[1])
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!(m.blocks[curve.control_block].centroid[1], top);
+}

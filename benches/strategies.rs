@@ -5,6 +5,7 @@
 //!     cargo bench --bench strategies -- [--quick] [--limit SECONDS] [--sizes 10,30,100]
 //!                                        [--strategies initial,secant,newton]
 //!                                        [--tolerances 1e-4,1e-6] [--brackets 1e-2,1e-3,1e-4]
+//!                                        [--reference 1e-8,1e-5]
 //!
 //! `--quick` runs the small walls only (10 × 10 and 30 × 30 blocks); the default adds the
 //! 100 × 100 wall (10⁴ blocks). For each wall the reference λ_ref is the tightest run
@@ -263,6 +264,7 @@ fn main() {
             })
             .collect()
     };
+    let (mut ref_tolerance, mut ref_bracket) = (REF_TOLERANCE, REF_BRACKET);
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -285,6 +287,11 @@ fn main() {
                 )
             }
             "--tolerances" => tolerances = list(it.next(), "--tolerances"),
+            "--reference" => {
+                let r = list(it.next(), "--reference");
+                assert_eq!(r.len(), 2, "--reference TOLERANCE,BRACKET");
+                (ref_tolerance, ref_bracket) = (r[0], r[1]);
+            }
             "--brackets" => brackets = list(it.next(), "--brackets"),
             "--strategies" => {
                 strategies = it
@@ -307,7 +314,7 @@ fn main() {
         "Capacity of rigid running-bond walls (n courses x n bricks of 0.4 m x 0.2 m, friction 31 deg, no cohesion), backend faer-cholesky."
     );
     println!(
-        "Reference lambda_ref of each wall: the tightest run (strategy {REF_STRATEGY}, tolerance {REF_TOLERANCE:e}, bracket {REF_BRACKET:e}); error = |lambda - lambda_ref| / lambda_ref."
+        "Reference lambda_ref of each wall: the tightest run (strategy {REF_STRATEGY}, tolerance {ref_tolerance:e}, bracket {ref_bracket:e}); error = |lambda - lambda_ref| / lambda_ref."
     );
     println!(
         "Each run is stopped after {:.0} s; wall time is the analysis only (no parsing/meshing).\n",
@@ -317,8 +324,8 @@ fn main() {
     println!("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|");
     let mut notes = Vec::new();
     for &n in &sizes {
-        eprintln!("wall {n} x {n}: reference run ({REF_STRATEGY}, tol {REF_TOLERANCE:e}, bracket {REF_BRACKET:e})");
-        let reference = measure(n, n, REF_STRATEGY, REF_TOLERANCE, REF_BRACKET, limit);
+        eprintln!("wall {n} x {n}: reference run ({REF_STRATEGY}, tol {ref_tolerance:e}, bracket {ref_bracket:e})");
+        let reference = measure(n, n, REF_STRATEGY, ref_tolerance, ref_bracket, limit);
         let lref = reference.lambda;
         let mut runs = vec![(reference, true)];
         print_row(&runs[0].0, lref, true);

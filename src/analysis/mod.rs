@@ -1,6 +1,8 @@
-//! Analyses: the static driver (this module), later capacity and time integration.
+//! Analyses: the static and capacity driver ([`statics`]) and implicit time integration
+//! ([`dynamics`]).
 
 pub mod config;
+pub mod dynamics;
 pub mod mechanism;
 pub mod statics;
 pub mod support;
@@ -56,6 +58,8 @@ pub struct Outcome {
     pub mechanism: Option<mechanism::Mechanism>,
     /// The final configuration (updated Lagrangian), when it differs from the mesh.
     pub current: Option<Mesh>,
+    /// Dynamic: the time history (history.csv).
+    pub history: Option<dynamics::History>,
 }
 
 /// Pivot ratio below which the factorization is taken as singular: a mechanism (METHOD.md
@@ -66,6 +70,16 @@ pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 
 /// Run the scene's analysis.
 pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Result<Outcome> {
+    run_with(scene, mesh, backend, &mut dynamics::NoMonitor)
+}
+
+/// Run the scene's analysis; a dynamic one streams its history and frames to `monitor`.
+pub fn run_with(
+    scene: &Scene,
+    mesh: &Mesh,
+    backend: &mut dyn LinearBackend,
+    monitor: &mut dyn dynamics::Monitor,
+) -> Result<Outcome> {
     if scene.analysis.kind != AnalysisType::Dynamic {
         // a free block that touches nothing at all is a modelling mistake (misplaced
         // coordinates, a tolerance too small), not a structure
@@ -97,11 +111,7 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
     }
     match scene.analysis.kind {
         AnalysisType::Static | AnalysisType::Capacity => statics::run(scene, mesh, backend),
-        AnalysisType::Dynamic => Err(Error::new(
-            "analysis type 'dynamic' is not available in this version",
-        )
-        .place("[analysis] key 'type'")
-        .fix("use type = \"static\" or \"capacity\"")),
+        AnalysisType::Dynamic => dynamics::run(scene, mesh, backend, monitor),
     }
 }
 

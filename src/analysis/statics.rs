@@ -633,6 +633,7 @@ impl<'a> Driver<'a> {
             load_factor,
             mechanism,
             current: Some(self.cur.clone()),
+            history: None,
         }
     }
 }

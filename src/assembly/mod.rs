@@ -5,6 +5,7 @@
 //! order whatever the number of threads.
 
 pub mod loads;
+pub mod mass;
 
 use crate::material::{block_elastic, ContactSprings};
 use crate::mesh::{Mesh, NodeMap};
@@ -21,6 +22,9 @@ pub struct System {
     pub n_contacts: usize,
     /// Per triangle: Dₑ (Pa) of its block material, times the thickness (m).
     tri_dt: Vec<[[f64; 3]; 3]>,
+    /// Per triangle: D_v (Pa·s) of its block material (viscous Lamé constants), times
+    /// the thickness (m).
+    tri_dv: Vec<[[f64; 3]; 3]>,
 }
 
 /// Local stiffness of a contact in its (n, s) frame (N/m): row = force component,
@@ -35,6 +39,17 @@ pub fn diagonal(k: ContactSprings) -> LocalStiffness {
 
 impl System {
     pub fn new(scene: &Scene, mesh: &Mesh) -> System {
+        Self::build(scene, mesh, false)
+    }
+
+    /// The system of a dynamic analysis: after the triangles and contacts, one 3-dof
+    /// element per rigid block (its own unknowns), so that the pattern holds the diagonal
+    /// the mass matrix needs even for a block that touches nothing.
+    pub fn for_dynamics(scene: &Scene, mesh: &Mesh) -> System {
+        Self::build(scene, mesh, true)
+    }
+
+    fn build(scene: &Scene, mesh: &Mesh, rigid_diagonal: bool) -> System {
         let mut conn = Connectivity::new();
         for t in &mesh.triangles {
             let mut dofs = [CONSTRAINED; 6];
@@ -52,6 +67,13 @@ impl System {
             dofs[3..].copy_from_slice(&mm.dofs);
             conn.push(&dofs);
         }
+        if rigid_diagonal {
+            for b in &mesh.blocks {
+                if let crate::mesh::BlockDofs::Rigid { first, .. } = b.dofs {
+                    conn.push(&[first, first + 1, first + 2]);
+                }
+            }
+        }
         let t = scene.model.thickness;
         let tri_dt = mesh
             .tri_block
@@ -62,11 +84,21 @@ impl System {
                 d.map(|r| r.map(|x| x * t))
             })
             .collect();
+        let tri_dv = mesh
+            .tri_block
+            .iter()
+            .map(|&b| {
+                let m = &scene.materials[scene.blocks[b as usize].material];
+                let d = crate::material::block_viscous(m, scene.model.plane);
+                d.map(|r| r.map(|x| x * t))
+            })
+            .collect();
         System {
             plan: AssemblyPlan::new(mesh.n_dofs, &conn),
             n_triangles: mesh.triangles.len(),
             n_contacts: mesh.contacts.len(),
             tri_dt,
+            tri_dv,
         }
     }
 
@@ -83,18 +115,39 @@ impl System {
     /// contact normals as they are now: the updated Lagrangian geometry) with a local
     /// stiffness per contact.
     pub fn stiffness_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
+        self.assemble_with(mesh, &self.tri_dt, local, out);
+    }
+
+    /// Damping matrix C (N·s/m) of the Kelvin–Voigt viscosities (METHOD.md §2, §6):
+    /// Cₑ = t A Bᵀ D_v B for the triangles and Tᵀ C′ T for the contacts, with a local
+    /// viscosity per contact (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h where they act).
+    pub fn damping_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
+        self.assemble_with(mesh, &self.tri_dv, local, out);
+    }
+
+    fn assemble_with(
+        &self,
+        mesh: &Mesh,
+        tri: &[[[f64; 3]; 3]],
+        local: &[LocalStiffness],
+        out: &mut CsrMatrix,
+    ) {
         let nt = self.n_triangles;
+        let nc = self.n_contacts;
         self.plan.assemble(
             |e, ke| {
                 if e < nt {
                     let t = mesh.triangles[e];
                     let p = t.map(|n| mesh.nodes[n as usize]);
-                    cst_stiffness(p, &self.tri_dt[e], ke);
-                } else {
+                    cst_stiffness(p, &tri[e], ke);
+                } else if e < nt + nc {
                     let c = e - nt;
                     let con = &mesh.contacts[c];
                     let (ml, mm) = (mesh.node_map(con.node_l), mesh.node_map(con.node_m));
                     contact_stiffness(&ml, &mm, con.normal, &local[c], ke);
+                } else {
+                    // the rigid blocks' diagonal elements (dynamics) carry no stiffness
+                    ke.fill(0.0);
                 }
             },
             out,

@@ -134,13 +134,23 @@ fn dispatch(cli: Cli) -> Result<()> {
                 }
             }
             let m = mesh::build(&sc);
-            let outcome = analysis::run(&sc, &m, backend.as_mut())
-                .map_err(|e| e.in_file(sc.file.as_deref().unwrap_or(Path::new("scene"))))?;
+            let outcome = if sc.analysis.kind == scene::AnalysisType::Dynamic {
+                let mut w = output::StreamWriter::new(&out, &sc, &m)?;
+                analysis::run_with(&sc, &m, backend.as_mut(), &mut w)
+            } else {
+                analysis::run(&sc, &m, backend.as_mut())
+            }
+            .map_err(|e| e.in_file(sc.file.as_deref().unwrap_or(Path::new("scene"))))?;
             output::write_all(&out, &sc, &m, &outcome)?;
             if !quiet {
                 match &outcome.status {
                     analysis::Status::Stable => println!(
-                        "stable: {} dofs, {} contacts, {:.3} s; results in {}",
+                        "{}: {} dofs, {} contacts, {:.3} s; results in {}",
+                        if sc.analysis.kind == scene::AnalysisType::Dynamic {
+                            "completed"
+                        } else {
+                            "stable"
+                        },
                         outcome.stats.dofs,
                         outcome.stats.contacts,
                         outcome.stats.wall_time_s,

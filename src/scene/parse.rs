@@ -122,6 +122,7 @@ const ANALYSIS_KEYS: &[&str] = &[
     "alpha",
     "rho_inf",
     "rayleigh",
+    "initial",
 ];
 
 /// Read and validate a scene file.

@@ -275,7 +275,11 @@ ground_motion = {{ expression = "{rate}*t", units = "g" }}
         t[k]
     );
     // within one time step: the heel opens at the first step whose end is past t_c
-    assert!(t[k] >= tc - 1e-9 && t[k] <= tc + dt + 1e-9, "{} vs {tc}", t[k]);
+    assert!(
+        t[k] >= tc - 1e-9 && t[k] <= tc + dt + 1e-9,
+        "{} vs {tc}",
+        t[k]
+    );
     let rz = col(&h, "pillar.rz");
     let th = rz.last().unwrap().abs();
     assert!(th > 1e-4, "the block rocks: θ = {th}");
@@ -362,6 +366,64 @@ ground_motion = {{ file = "{file}", scale = 2.0, direction = "y" }}
     // sample 7 (t = 0.07 s) of the file: 0.1 sin(2π 1.5 t) · min(1, k/50), in g
     let t: f64 = 0.07;
     let want = 2.0 * G * 0.1 * (2.0 * std::f64::consts::PI * 1.5 * t).sin() * 7.0 / 50.0;
-    assert!((gm.vector(t)[1] - want).abs() < 1e-7, "{:?} vs {want}", gm.vector(t));
+    assert!(
+        (gm.vector(t)[1] - want).abs() < 1e-7,
+        "{:?} vs {want}",
+        gm.vector(t)
+    );
     assert_eq!(gm.vector(t)[0], 0.0);
+}
+
+/// The seed's dynamic incline examples (section 4.2, Fig. 4): on a 30° incline a 4 m × 4 m
+/// block with φ = 25° slides (Δt = 0.04 s) and a block 4 m along the slope and 12 m high
+/// with φ = 35° topples (Δt = 0.01 s), as the kinematic conditions of Hoek and Bray say
+/// (METHOD.md §5). Seed Table 1 is not legible in the source; the Hoek–Bray properties of
+/// METHOD.md §5 are used. Deformable CST blocks, as in the seed.
+#[test]
+fn seed_incline_examples_slide_and_topple() {
+    let scene = |b: f64, d: f64, phi: f64, dt: f64, duration: f64| {
+        format!(
+            r#"{MATERIALS}{}
+[[generate]]
+type = "incline"
+material = "rock"
+slope_angle = 30.0
+breadth = {b}
+height = {d}
+slope_length = {}
+[analysis]
+type = "dynamic"
+dt = {dt}
+duration = {duration}
+"#,
+            joint(phi),
+            6.0 * b.max(d)
+        )
+    };
+    // square block: slides with s = ½ g (sin α − cos α tan φ) t², hardly rotates
+    let h = run(&scene(4.0, 4.0, 25.0, 0.04, 2.0));
+    let (ux, uy, rz) = (
+        col(&h, "block.ux"),
+        col(&h, "block.uy"),
+        col(&h, "block.rz"),
+    );
+    let s = ux.last().unwrap().hypot(*uy.last().unwrap());
+    let (a, p) = (30f64.to_radians(), 25f64.to_radians());
+    let exact = 0.5 * G * (a.sin() - a.cos() * p.tan()) * 4.0;
+    let th = rz.last().unwrap().abs();
+    eprintln!("4 m x 4 m, φ = 25°: slides {s:.4} m in 2 s (closed form {exact:.4} m), rotation {th:.2e} rad");
+    assert!(common::rel_err(s, exact) < 0.005, "{s} vs {exact}");
+    assert!(th < 1e-3, "{th}");
+    // tall block: topples about its downhill toe; its base hardly slides (φ > α)
+    let h = run(&scene(4.0, 12.0, 35.0, 0.01, 1.5));
+    let rz = col(&h, "block.rz");
+    let th = *rz.last().unwrap();
+    let (ux, uy) = (col(&h, "block.ux"), col(&h, "block.uy"));
+    let u = ux.last().unwrap().hypot(*uy.last().unwrap());
+    let open = *col(&h, "open_contacts").last().unwrap();
+    eprintln!("4 m x 12 m, φ = 35°: rotation {th:.4} rad after 1.5 s, centroid moved {u:.3} m, {open} open contacts");
+    // toppling down the slope (towards −x) is a counter-clockwise rotation: θ > 0,
+    // and by 1.5 s it is well under way (a 0.05 rad tilt moves the top by 0.6 m)
+    assert!(th > 0.05, "θ = {th}");
+    assert!(open >= 1.0);
 }

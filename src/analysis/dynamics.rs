@@ -310,15 +310,13 @@ fn invert3(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
     let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
         - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    let mut r = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
             let (a0, a1) = ((j + 1) % 3, (j + 2) % 3);
             let (b0, b1) = ((i + 1) % 3, (i + 2) % 3);
-            r[i][j] = (m[a0][b0] * m[a1][b1] - m[a0][b1] * m[a1][b0]) / det;
-        }
-    }
-    r
+            (m[a0][b0] * m[a1][b1] - m[a0][b1] * m[a1][b0]) / det
+        })
+    })
 }
 
 /// A converged step, ready to commit.
@@ -378,8 +376,7 @@ impl<'a> Dynamics<'a> {
         });
         let viscous_contacts = visc.iter().any(|c| c.kn > 0.0 || c.ks > 0.0);
         let pattern = system.plan.pattern().clone();
-        let cbuf = (viscous_blocks || viscous_contacts)
-            .then(|| CsrMatrix::zeros(pattern.clone()));
+        let cbuf = (viscous_blocks || viscous_contacts).then(|| CsrMatrix::zeros(pattern.clone()));
         let compliance = mesh
             .tri_block
             .iter()
@@ -467,7 +464,8 @@ impl<'a> Dynamics<'a> {
             .iter()
             .map(|&k| crate::assembly::diagonal(k))
             .collect();
-        self.system.stiffness_into(&self.cur, &local, &mut self.kbuf);
+        self.system
+            .stiffness_into(&self.cur, &local, &mut self.kbuf);
         let mut x = self.f_static.clone();
         let ok = self.backend.factorize(&self.kbuf).is_ok()
             && self.backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO
@@ -606,7 +604,11 @@ impl<'a> Dynamics<'a> {
                     flips[k] += 1;
                 }
                 if flips[k] >= FLIPS_BEFORE_ELASTIC {
-                    weight[k] = if open { weight[k] * OPEN_WEIGHT_DECAY } else { 1.0 };
+                    weight[k] = if open {
+                        weight[k] * OPEN_WEIGHT_DECAY
+                    } else {
+                        1.0
+                    };
                 }
             }
             // at the first iteration, the states of the last step (a contact exactly at
@@ -773,7 +775,10 @@ impl<'a> Dynamics<'a> {
         }
         // work of the blocks' relative motion on the contacts beyond their elastic energy
         self.energy.contact += contact;
-        self.energy.kinetic = 0.5 * (0..v.len()).map(|i| self.mass[i] * v[i] * v[i]).sum::<f64>();
+        self.energy.kinetic = 0.5
+            * (0..v.len())
+                .map(|i| self.mass[i] * v[i] * v[i])
+                .sum::<f64>();
         self.energy.elastic = self.elastic_energy(&trial.mesh, &trial.stress, &trial.force);
         for (u, d) in self.committed.u.iter_mut().zip(dq) {
             *u += d;
@@ -984,4 +989,36 @@ pub fn run(
     let mut out = d.outcome(status);
     out.history = Some(history);
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_of_the_elastic_matrix() {
+        let d = crate::material::elastic_matrix(56e9, 21e9, crate::scene::Plane::Strain);
+        let c = invert3(d);
+        for i in 0..3 {
+            for j in 0..3 {
+                let p: f64 = (0..3).map(|k| d[i][k] * c[k][j]).sum();
+                assert!(
+                    (p - f64::from(u8::from(i == j))).abs() < 1e-12,
+                    "{i} {j} {p}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn family_members() {
+        assert_eq!(Scheme::hht(0.0), Scheme::newmark());
+        // generalized-α with ρ∞ = 1 is the trapezoidal rule at the mid-point
+        let g = Scheme::generalized_alpha(1.0);
+        assert!((g.alpha_m - 0.5).abs() < 1e-15 && (g.alpha_f - 0.5).abs() < 1e-15);
+        assert!((g.gamma - 0.5).abs() < 1e-15 && (g.beta - 0.25).abs() < 1e-15);
+        // ρ∞ = 0: asymptotic annihilation, γ = 3/2, β = 1
+        let g = Scheme::generalized_alpha(0.0);
+        assert!((g.gamma - 1.5).abs() < 1e-15 && (g.beta - 1.0).abs() < 1e-15);
+    }
 }

@@ -60,7 +60,12 @@ pub fn polar_moment(poly: &[Point]) -> f64 {
             let (p, q) = (poly[i], poly[(i + 1) % n]);
             let cross = p[0] * q[1] - q[0] * p[1];
             cross
-                * (p[0] * p[0] + p[0] * q[0] + q[0] * q[0] + p[1] * p[1] + p[1] * q[1] + q[1] * q[1])
+                * (p[0] * p[0]
+                    + p[0] * q[0]
+                    + q[0] * q[0]
+                    + p[1] * p[1]
+                    + p[1] * q[1]
+                    + q[1] * q[1])
         })
         .sum::<f64>()
         / 12.0
@@ -98,12 +103,7 @@ mod tests {
     fn rectangle_polar_moment() {
         // b × d about its centre: b d (b² + d²) / 12
         let (b, d) = (2.0, 3.0);
-        let p = [
-            [-1.0, -1.5],
-            [1.0, -1.5],
-            [1.0, 1.5],
-            [-1.0, 1.5],
-        ];
+        let p = [[-1.0, -1.5], [1.0, -1.5], [1.0, 1.5], [-1.0, 1.5]];
         let want = b * d * (b * b + d * d) / 12.0;
         assert!((polar_moment(&p) - want).abs() < 1e-12);
     }

@@ -198,9 +198,7 @@ pub fn write_all(dir: &Path, scene: &Scene, mesh: &Mesh, out: &Outcome) -> Resul
                     .frames
                     .iter()
                     .copied()
-                    .filter(|f| {
-                        *f == last || dir.join(format!("blocks_{:04}.vtu", f.1)).exists()
-                    })
+                    .filter(|f| *f == last || dir.join(format!("blocks_{:04}.vtu", f.1)).exists())
                     .collect();
                 vtk::write_pvd(dir, &written)?;
             }

@@ -134,10 +134,12 @@ pub fn from_toml(v: &toml::Value, base: Option<&Path>) -> Result<GroundMotion, M
     let string = |k: &str| -> Result<Option<&str>, MotionError> {
         match t.get(k) {
             None => Ok(None),
-            Some(v) => v
-                .as_str()
-                .map(Some)
-                .ok_or_else(|| merr(format!("ground_motion '{k}' must be a string"), format!("write {k} = \"...\" in quotes"))),
+            Some(v) => v.as_str().map(Some).ok_or_else(|| {
+                merr(
+                    format!("ground_motion '{k}' must be a string"),
+                    format!("write {k} = \"...\" in quotes"),
+                )
+            }),
         }
     };
     let num = |k: &str| -> Result<Option<f64>, MotionError> {
@@ -328,9 +330,10 @@ fn samples_from_values(a: Vec<f64>, dt: f64) -> Result<Source, MotionError> {
 
 /// Parse one number of a record (Fortran `D` exponents accepted).
 fn parse_num(tok: &str) -> Option<f64> {
-    let v: f64 = tok.parse().ok().or_else(|| {
-        tok.replace(['D', 'd'], "E").parse().ok()
-    })?;
+    let v: f64 = tok
+        .parse()
+        .ok()
+        .or_else(|| tok.replace(['D', 'd'], "E").parse().ok())?;
     v.is_finite().then_some(v)
 }
 
@@ -343,7 +346,10 @@ fn read_values(text: &str, dt: f64) -> Result<Source, MotionError> {
         if l.is_empty() || l.starts_with('#') || l.starts_with('%') {
             continue;
         }
-        for tok in l.split(|c: char| c.is_whitespace() || c == ',').filter(|s| !s.is_empty()) {
+        for tok in l
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|s| !s.is_empty())
+        {
             a.push(parse_num(tok).ok_or_else(|| {
                 line_err(
                     k + 1,
@@ -353,7 +359,10 @@ fn read_values(text: &str, dt: f64) -> Result<Source, MotionError> {
             })?);
         }
     }
-    samples_from_values(a, dt).map_err(|e| MotionError { at: Some((PathBuf::new(), None)), ..e })
+    samples_from_values(a, dt).map_err(|e| MotionError {
+        at: Some((PathBuf::new(), None)),
+        ..e
+    })
 }
 
 /// CSV: two columns, time (s) and acceleration; a first line that is not numeric is a
@@ -424,7 +433,10 @@ fn read_at2(text: &str) -> Result<Source, MotionError> {
     let h = lines[3].to_ascii_uppercase();
     let after = |key: &str| -> Option<f64> {
         let i = h.find(key)?;
-        let rest = h[i + key.len()..].trim_start().trim_start_matches('=').trim_start();
+        let rest = h[i + key.len()..]
+            .trim_start()
+            .trim_start_matches('=')
+            .trim_start();
         let tok: String = rest
             .chars()
             .take_while(|c| c.is_ascii_digit() || matches!(c, '.' | 'E' | '-' | '+'))
@@ -477,7 +489,10 @@ fn read_at2(text: &str) -> Result<Source, MotionError> {
     if a.len() != npts as usize {
         return Err(line_err(
             lines.len(),
-            format!("the record holds {} values but its header says NPTS = {npts}", a.len()),
+            format!(
+                "the record holds {} values but its header says NPTS = {npts}",
+                a.len()
+            ),
             "correct NPTS or restore the missing values",
         ));
     }
@@ -766,7 +781,10 @@ mod tests {
     fn expression_grammar() {
         let e = Expr::parse("-2^2 + 3*(1 - t)/2 + 2**3 + 1e-1*10 + max(t, 2) + pi*0").unwrap();
         assert!((e.eval(1.0) - (-4.0 + 0.0 + 8.0 + 1.0 + 2.0)).abs() < 1e-12);
-        assert!(Expr::parse("exq(t)").unwrap_err().1.contains("unknown name 'exq'"));
+        assert!(Expr::parse("exq(t)")
+            .unwrap_err()
+            .1
+            .contains("unknown name 'exq'"));
         assert!(Expr::parse("sin(t").is_err());
         assert!(Expr::parse("2*").is_err());
         assert!(Expr::parse("t t").is_err());
@@ -775,7 +793,8 @@ mod tests {
 
     #[test]
     fn records() {
-        let s = read_at2("H1\nH2\nH3\nNPTS=  3, DT= .01000 SEC\n .1E+00  -.2E+00\n .3E+00\n").unwrap();
+        let s =
+            read_at2("H1\nH2\nH3\nNPTS=  3, DT= .01000 SEC\n .1E+00  -.2E+00\n .3E+00\n").unwrap();
         assert_eq!(
             s,
             Source::Samples {
@@ -791,21 +810,34 @@ mod tests {
         let e = read_at2("H1\nH2\nH3\nNPTS=  2, DT= .01000 SEC\n .1E+00  x\n").unwrap_err();
         assert_eq!(e.at.unwrap().1, Some(5));
         let s = read_csv("t_s,acc_g\n0,0\n0.5,1\n1.0,0\n").unwrap();
-        let Source::Samples { t, a } = &s else { panic!() };
+        let Source::Samples { t, a } = &s else {
+            panic!()
+        };
         assert!((interpolate(t, a, 0.25) - 0.5).abs() < 1e-15);
         assert_eq!(interpolate(t, a, 1.5), 0.0);
-        assert_eq!(read_csv("t,a\n0,0\n0,1\n").unwrap_err().at.unwrap().1, Some(3));
+        assert_eq!(
+            read_csv("t,a\n0,0\n0,1\n").unwrap_err().at.unwrap().1,
+            Some(3)
+        );
         assert!(read_csv("t,a\n").is_err());
         let s = read_values("# c\n1 2 3\n4,5\n", 0.5).unwrap();
-        let Source::Samples { t, .. } = &s else { panic!() };
+        let Source::Samples { t, .. } = &s else {
+            panic!()
+        };
         assert_eq!(t[4], 2.0);
-        assert_eq!(read_values("1 2\n3 zz\n", 0.5).unwrap_err().at.unwrap().1, Some(2));
+        assert_eq!(
+            read_values("1 2\n3 zz\n", 0.5).unwrap_err().at.unwrap().1,
+            Some(2)
+        );
         assert!(read_values("# nothing\n", 0.5).is_err());
     }
 
     #[test]
     fn bad_tables() {
-        assert!(gm(r#"{ values = [1.0, 2.0], dt = 0.0 }"#).unwrap_err().what.contains("dt"));
+        assert!(gm(r#"{ values = [1.0, 2.0], dt = 0.0 }"#)
+            .unwrap_err()
+            .what
+            .contains("dt"));
         assert!(gm(r#"{ values = [1.0] }"#).is_err());
         assert!(gm(r#"{ values = [] , dt = 0.1}"#).is_err());
         assert!(gm(r#"{ expression = "t", file = "a.csv" }"#).is_err());

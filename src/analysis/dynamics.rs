@@ -27,8 +27,8 @@
 //!
 //! Energy audit (J, all in the ground's frame): kinetic ½ vᵀMv; elastic energy of the
 //! blocks ½ ∫ σᵀ Dₑ⁻¹ σ and of the contacts ½ (Fₙ²/kₙ + Fₛ²/kₛ); viscous dissipation
-//! Σ Δuᵀ (C v)ₘ; contact dissipation Σ F̄ · (Δδ − ΔF/k) per contact component (slip, and
-//! the release of a contact that opens); work of gravity and loads Σ Δuᵀ F_static; work
+//! Σ Δuᵀ (C v)ₘ; friction dissipation Σ F̄ₛ · (Δδₛ − ΔFₛ/kₛ) per contact (the normal
+//! band, with its opening remembered, is elastic); work of gravity and loads Σ Δuᵀ F_static; work
 //! of the ground motion Σ Δuᵀ (−M ι a_g)ₘ, with (·)ₘ the mean over the step. The balance
 //! error is kinetic + elastic + dissipated − work: zero up to the iteration tolerance
 //! for Newmark's average acceleration (which conserves energy); HHT and generalized-α
@@ -764,13 +764,14 @@ impl<'a> Dynamics<'a> {
         e.work_static += dot(dq, &self.f_static);
         e.work_ground += 0.5 * (dot(dq, &fg0) + dot(dq, &fg1));
         e.viscous += 0.5 * (dot(dq, &self.f_visc) + dot(dq, &f_visc));
+        // friction: the shear force's work beyond its elastic energy (the normal band
+        // with its opening is elastic: no dissipation)
         let mut contact = 0.0;
         for (k, sp) in self.springs.iter().enumerate() {
-            let (f0, f1, d) = (self.committed.force[k], trial.force[k], trial.rel[k]);
-            for (j, kk) in [sp.kn, sp.ks].into_iter().enumerate() {
-                if kk > 0.0 && (f0[j] != 0.0 || f1[j] != 0.0) {
-                    contact += 0.5 * (f0[j] + f1[j]) * (d[j] - (f1[j] - f0[j]) / kk);
-                }
+            let f0 = self.true_force(k);
+            let (f1, d) = (trial.force[k], trial.rel[k]);
+            if sp.ks > 0.0 && (f0[1] != 0.0 || f1[1] != 0.0) {
+                contact += 0.5 * (f0[1] + f1[1]) * (d[1] - (f1[1] - f0[1]) / sp.ks);
             }
         }
         // work of the blocks' relative motion on the contacts beyond their elastic energy
@@ -784,8 +785,21 @@ impl<'a> Dynamics<'a> {
             *u += d;
         }
         self.f_int = trial.f_int;
+        // an open contact keeps its opening, as the normal force it would carry if the
+        // band could pull (Fₙ = kₙ × opening > 0, never applied): the contact law then
+        // closes it only when the opening is taken up, not at the next compressive
+        // increment (a rocking block lands where it lifted off)
+        let mut force = trial.force;
+        for (k, f) in force.iter_mut().enumerate() {
+            if trial.state[k] == ContactState::Open {
+                *f = [
+                    self.committed.force[k][0] + self.springs[k].kn * trial.rel[k][0],
+                    0.0,
+                ];
+            }
+        }
         self.committed.stress = trial.stress;
-        self.committed.force = trial.force;
+        self.committed.force = force;
         self.committed.state = trial.state;
         self.cur = trial.mesh;
         self.v = v;
@@ -817,6 +831,15 @@ impl<'a> Dynamics<'a> {
         }
         self.time = target;
         Ok(true)
+    }
+
+    /// The force (N) contact `k` carries: the committed one, zero when it is open.
+    fn true_force(&self, k: usize) -> [f64; 2] {
+        if self.committed.state[k] == ContactState::Open {
+            [0.0, 0.0]
+        } else {
+            self.committed.force[k]
+        }
     }
 
     /// Centroid displacement (m) and rotation (rad) of a block, relative to the ground.
@@ -855,7 +878,9 @@ impl<'a> Dynamics<'a> {
             u: self.committed.u.clone(),
             node_disp,
             stress: self.committed.stress.clone(),
-            contact_forces: self.committed.force.clone(),
+            contact_forces: (0..self.committed.force.len())
+                .map(|k| self.true_force(k))
+                .collect(),
             contact_states: self.committed.state.clone(),
             stats: self.stats.clone(),
             load_factor: None,

@@ -1021,6 +1021,7 @@ mod tests {
     use super::*;
 
     #[test]
+    #[allow(clippy::needless_range_loop)]
     fn inverse_of_the_elastic_matrix() {
         let d = crate::material::elastic_matrix(56e9, 21e9, crate::scene::Plane::Strain);
         let c = invert3(d);

@@ -486,3 +486,55 @@ ground_motion = {{ expression = "0.5*step(0.25-t)", units = "g" }}
     );
     assert!((ratio / housner - 1.0).abs() < 0.10, "{ratio} vs {housner}");
 }
+
+/// `dfem run` on the built-in dynamic example: history.csv (INTERFACE.md header), frames
+/// every `[output] every` steps in results.pvd, summary status "completed", and the same
+/// bytes whatever the number of threads.
+#[test]
+fn cli_dynamic_run_writes_history_and_frames() {
+    let mut histories = Vec::new();
+    for threads in ["1", "2"] {
+        let dir = common::tmp_dir(&format!("dyn_cli_{threads}"));
+        let out = std::process::Command::new(common::dfem_bin())
+            .args([
+                "run",
+                "--example",
+                "sliding",
+                "--quiet",
+                "--threads",
+                threads,
+                "--out",
+            ])
+            .arg(&dir)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let h = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+        let header = h.lines().next().unwrap();
+        assert!(
+            header.starts_with("t,block.ux,block.uy,block.rz,"),
+            "{header}"
+        );
+        // dt = 0.04 s over 2 s: the initial row and 50 steps
+        assert_eq!(h.lines().count(), 1 + 51);
+        let pvd = std::fs::read_to_string(dir.join("results.pvd")).unwrap();
+        // every = 5: steps 0, 5, ..., 50, two parts each
+        assert_eq!(pvd.matches("<DataSet").count(), 2 * 11, "{pvd}");
+        assert!(dir.join("blocks_0050.vtu").exists());
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(v["status"], "completed");
+        assert_eq!(v["analysis"], "dynamic");
+        assert_eq!(v["stats"]["symbolic_factorizations"], 1);
+        histories.push(h);
+    }
+    assert_eq!(
+        histories[0], histories[1],
+        "results depend on the thread count"
+    );
+}

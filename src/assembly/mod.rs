@@ -49,7 +49,9 @@ impl System {
         Self::build(scene, mesh, true)
     }
 
-    fn build(scene: &Scene, mesh: &Mesh, rigid_diagonal: bool) -> System {
+    /// `dynamic`: add the rigid blocks' diagonal elements and the viscous matrices.
+    fn build(scene: &Scene, mesh: &Mesh, dynamic: bool) -> System {
+        let rigid_diagonal = dynamic;
         let mut conn = Connectivity::new();
         for t in &mesh.triangles {
             let mut dofs = [CONSTRAINED; 6];
@@ -84,9 +86,11 @@ impl System {
                 d.map(|r| r.map(|x| x * t))
             })
             .collect();
+        // viscous matrices only for a dynamic analysis (a static run does no damping work)
         let tri_dv = mesh
             .tri_block
             .iter()
+            .filter(|_| rigid_diagonal)
             .map(|&b| {
                 let m = &scene.materials[scene.blocks[b as usize].material];
                 let d = crate::material::block_viscous(m, scene.model.plane);
@@ -118,7 +122,8 @@ impl System {
         self.assemble_with(mesh, &self.tri_dt, local, out);
     }
 
-    /// Damping matrix C (N·s/m) of the Kelvin–Voigt viscosities (METHOD.md §2, §6):
+    /// Damping matrix C (N·s/m) of the Kelvin–Voigt viscosities (METHOD.md §2, §6), for a
+    /// system built [`System::for_dynamics`]:
     /// Cₑ = t A Bᵀ D_v B for the triangles and Tᵀ C′ T for the contacts, with a local
     /// viscosity per contact (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h where they act).
     pub fn damping_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {

@@ -32,7 +32,17 @@ fn every_example_runs() {
             serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
                 .unwrap();
         let status = v["status"].as_str().unwrap();
-        assert!(status == "stable" || status == "failed", "{name}: {status}");
+        assert!(
+            status == "stable" || status == "failed" || status == "completed",
+            "{name}: {status}"
+        );
+        if v["analysis"] == "dynamic" {
+            assert_eq!(status, "completed", "{name}");
+            let h = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+            assert!(h.starts_with("t,"), "{name}: {}", &h[..h.len().min(80)]);
+            assert!(h.lines().count() > 2, "{name}: history");
+            assert!(dir.join("results.pvd").exists(), "{name}: no .pvd");
+        }
         eprintln!(
             "{name}: {status} {} ({} dofs, {} contacts, {:.3} s)",
             v["message"], v["stats"]["dofs"], v["stats"]["contacts"], v["stats"]["wall_time_s"]

@@ -323,7 +323,14 @@ fn progress_reports_do_not_change_the_results() {
     let (_, silent) = common::solve(&sc);
     let mut rec = Recorder::default();
     let mut backend = dfem::solve::backend(dfem::solve::DEFAULT).unwrap();
-    let out = dfem::analysis::run_with_progress(&sc, &m, backend.as_mut(), &mut rec).unwrap();
+    let out = dfem::analysis::run_with(
+        &sc,
+        &m,
+        backend.as_mut(),
+        &mut rec,
+        &mut dfem::analysis::dynamics::NoMonitor,
+    )
+    .unwrap();
     assert_eq!(out.u, silent.u);
     assert_eq!(out.load_factor, silent.load_factor);
     assert_eq!(out.capacity_curve, silent.capacity_curve);

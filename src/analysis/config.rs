@@ -44,6 +44,21 @@ pub struct Trial {
     pub f_int: Vec<f64>,
     /// The increment of unknowns evaluated (m, rad).
     pub dq: Vec<f64>,
+    /// Per contact: the increment of relative displacement (Δδₙ, Δδₛ) (m) in the
+    /// contact's frame at the start of the increment (the energy audit's slip).
+    pub rel: Vec<[f64; 2]>,
+}
+
+/// The secant local stiffness (N/m) of a contact in a state (METHOD.md §4, step 1): the
+/// elastic springs when it sticks, no shear when it slips (the friction force is carried
+/// as a force, not a stiffness), nothing when it is open. The same rule gives the
+/// contacts' viscosities (N·s/m) from (cₙ, cₛ).
+pub fn secant_local(k: crate::material::ContactSprings, state: ContactState) -> [[f64; 2]; 2] {
+    match state {
+        ContactState::Stick => [[k.kn, 0.0], [0.0, k.ks]],
+        ContactState::Slip => [[k.kn, 0.0], [0.0, 0.0]],
+        ContactState::Open => [[0.0, 0.0], [0.0, 0.0]],
+    }
 }
 
 /// Move the configuration `cur` by the increment `dq` (unknowns) and `presc` (prescribed
@@ -156,7 +171,7 @@ pub fn evaluate(
         .collect();
     // contacts
     let nc = cur.contacts.len();
-    let res: Vec<([f64; 2], ContactState)> = (0..nc)
+    let res: Vec<([f64; 2], ContactState, [f64; 2])> = (0..nc)
         .into_par_iter()
         .with_min_len(256)
         .map(|k| {
@@ -167,9 +182,11 @@ pub fn evaluate(
                 n0[0] * rel[0] + n0[1] * rel[1],
                 -n0[1] * rel[0] + n0[0] * rel[1],
             ];
-            law.update(area[k], committed.force[k], d)
+            let (f, st) = law.update(area[k], committed.force[k], d);
+            (f, st, d)
         })
         .collect();
+    let rel: Vec<[f64; 2]> = res.iter().map(|r| r.2).collect();
     let force: Vec<[f64; 2]> = res.iter().map(|r| r.0).collect();
     let state: Vec<ContactState> = res.iter().map(|r| r.1).collect();
     // internal force vector, serial in element order (deterministic)
@@ -208,5 +225,6 @@ pub fn evaluate(
         state,
         f_int,
         dq: dq.to_vec(),
+        rel,
     }
 }

@@ -1,7 +1,9 @@
-//! Analyses: the static driver (this module), later capacity and time integration.
+//! Analyses: the static and capacity driver ([`statics`]) and implicit time integration
+//! ([`dynamics`]).
 
 pub mod config;
 pub mod curve;
+pub mod dynamics;
 pub mod mechanism;
 pub mod progress;
 pub mod statics;
@@ -65,6 +67,8 @@ pub struct Outcome {
     pub current: Option<Mesh>,
     /// Capacity: λ against the control block's displacement, per converged increment.
     pub capacity_curve: Option<curve::Curve>,
+    /// Dynamic: the time history (history.csv).
+    pub history: Option<dynamics::History>,
 }
 
 /// Pivot ratio below which the factorization is taken as singular: a mechanism (METHOD.md
@@ -75,16 +79,24 @@ pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 
 /// Run the scene's analysis.
 pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Result<Outcome> {
-    run_with_progress(scene, mesh, backend, &mut progress::Silent)
+    run_with(
+        scene,
+        mesh,
+        backend,
+        &mut progress::Silent,
+        &mut dynamics::NoMonitor,
+    )
 }
 
-/// Run the scene's analysis, telling `progress` how it goes (phases, iterations, converged
-/// increments). The results are those of [`run`].
-pub fn run_with_progress(
+/// Run the scene's analysis, telling `progress` how a static or capacity analysis goes
+/// (phases, iterations, converged increments); a dynamic one streams its history and
+/// frames to `monitor`. The results are those of [`run`].
+pub fn run_with(
     scene: &Scene,
     mesh: &Mesh,
     backend: &mut dyn LinearBackend,
     progress: &mut dyn progress::Progress,
+    monitor: &mut dyn dynamics::Monitor,
 ) -> Result<Outcome> {
     if scene.analysis.kind != AnalysisType::Dynamic {
         // a free block that touches nothing at all is a modelling mistake (misplaced
@@ -119,11 +131,28 @@ pub fn run_with_progress(
         AnalysisType::Static | AnalysisType::Capacity => {
             statics::run_with_progress(scene, mesh, backend, progress)
         }
-        AnalysisType::Dynamic => Err(Error::new(
-            "analysis type 'dynamic' is not available in this version",
+        AnalysisType::Dynamic => dynamics::run(scene, mesh, backend, monitor),
+    }
+}
+
+/// The number under `[analysis]` key `k`, `d` when absent; an error naming the key and
+/// the allowed range `[lo, hi]` when it is not a finite number in it.
+pub(crate) fn analysis_number(scene: &Scene, k: &str, d: f64, lo: f64, hi: f64) -> Result<f64> {
+    let Some(v) = scene.analysis.extra.get(k) else {
+        return Ok(d);
+    };
+    let f = v
+        .as_float()
+        .or_else(|| v.as_integer().map(|i| i as f64))
+        .unwrap_or(f64::NAN);
+    if f.is_finite() && f >= lo && f <= hi {
+        Ok(f)
+    } else {
+        Err(
+            Error::new(format!("'{k}' must be a number from {lo} to {hi}"))
+                .place(format!("[analysis] key '{k}'"))
+                .fix(format!("for example {k} = {d}")),
         )
-        .place("[analysis] key 'type'")
-        .fix("use type = \"static\" or \"capacity\"")),
     }
 }
 

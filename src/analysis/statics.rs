@@ -71,26 +71,7 @@ impl Settings {
                     .fix("use \"initial\", \"secant\" or \"newton\"")
             })?,
         };
-        let num = |k: &str, d: f64, lo: f64, hi: f64| -> Result<f64> {
-            match x.get(k) {
-                None => Ok(d),
-                Some(v) => {
-                    let f = v
-                        .as_float()
-                        .or_else(|| v.as_integer().map(|i| i as f64))
-                        .unwrap_or(f64::NAN);
-                    if f.is_finite() && f >= lo && f <= hi {
-                        Ok(f)
-                    } else {
-                        Err(
-                            Error::new(format!("'{k}' must be a number from {lo} to {hi}"))
-                                .place(place(k))
-                                .fix(format!("for example {k} = {d}")),
-                        )
-                    }
-                }
-            }
-        };
+        let num = |k: &str, d: f64, lo: f64, hi: f64| super::analysis_number(scene, k, d, lo, hi);
         let default_iters = if strategy == Strategy::Initial {
             2000.0
         } else {
@@ -773,6 +754,7 @@ impl<'a> Driver<'a> {
             mechanism,
             current: Some(self.cur.clone()),
             capacity_curve: None,
+            history: None,
         }
     }
 }

@@ -5,6 +5,7 @@
 //! order whatever the number of threads.
 
 pub mod loads;
+pub mod mass;
 
 use crate::material::{block_elastic, ContactSprings};
 use crate::mesh::{Mesh, NodeMap};
@@ -21,6 +22,9 @@ pub struct System {
     pub n_contacts: usize,
     /// Per triangle: Dₑ (Pa) of its block material, times the thickness (m).
     tri_dt: Vec<[[f64; 3]; 3]>,
+    /// Per triangle: D_v (Pa·s) of its block material (viscous Lamé constants), times
+    /// the thickness (m).
+    tri_dv: Vec<[[f64; 3]; 3]>,
 }
 
 /// Local stiffness of a contact in its (n, s) frame (N/m): row = force component,
@@ -35,6 +39,19 @@ pub fn diagonal(k: ContactSprings) -> LocalStiffness {
 
 impl System {
     pub fn new(scene: &Scene, mesh: &Mesh) -> System {
+        Self::build(scene, mesh, false)
+    }
+
+    /// The system of a dynamic analysis: after the triangles and contacts, one 3-dof
+    /// element per rigid block (its own unknowns), so that the pattern holds the diagonal
+    /// the mass matrix needs even for a block that touches nothing.
+    pub fn for_dynamics(scene: &Scene, mesh: &Mesh) -> System {
+        Self::build(scene, mesh, true)
+    }
+
+    /// `dynamic`: add the rigid blocks' diagonal elements and the viscous matrices.
+    fn build(scene: &Scene, mesh: &Mesh, dynamic: bool) -> System {
+        let rigid_diagonal = dynamic;
         let mut conn = Connectivity::new();
         for t in &mesh.triangles {
             let mut dofs = [CONSTRAINED; 6];
@@ -52,6 +69,13 @@ impl System {
             dofs[3..].copy_from_slice(&mm.dofs);
             conn.push(&dofs);
         }
+        if rigid_diagonal {
+            for b in &mesh.blocks {
+                if let crate::mesh::BlockDofs::Rigid { first, .. } = b.dofs {
+                    conn.push(&[first, first + 1, first + 2]);
+                }
+            }
+        }
         let t = scene.model.thickness;
         let tri_dt = mesh
             .tri_block
@@ -62,11 +86,23 @@ impl System {
                 d.map(|r| r.map(|x| x * t))
             })
             .collect();
+        // viscous matrices only for a dynamic analysis (a static run does no damping work)
+        let tri_dv = mesh
+            .tri_block
+            .iter()
+            .filter(|_| rigid_diagonal)
+            .map(|&b| {
+                let m = &scene.materials[scene.blocks[b as usize].material];
+                let d = crate::material::block_viscous(m, scene.model.plane);
+                d.map(|r| r.map(|x| x * t))
+            })
+            .collect();
         System {
             plan: AssemblyPlan::new(mesh.n_dofs, &conn),
             n_triangles: mesh.triangles.len(),
             n_contacts: mesh.contacts.len(),
             tri_dt,
+            tri_dv,
         }
     }
 
@@ -85,17 +121,39 @@ impl System {
     /// When a local stiffness is unsymmetric (Newton's tangent of a slipping contact), so
     /// is the result (for an LU backend); otherwise it is symmetric to the bit.
     pub fn stiffness_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
+        self.assemble_with(mesh, &self.tri_dt, local, out);
+    }
+
+    /// Damping matrix C (N·s/m) of the Kelvin–Voigt viscosities (METHOD.md §2, §6), for a
+    /// system built [`System::for_dynamics`]:
+    /// Cₑ = t A Bᵀ D_v B for the triangles and Tᵀ C′ T for the contacts, with a local
+    /// viscosity per contact (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h where they act).
+    pub fn damping_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
+        self.assemble_with(mesh, &self.tri_dv, local, out);
+    }
+
+    fn assemble_with(
+        &self,
+        mesh: &Mesh,
+        tri: &[[[f64; 3]; 3]],
+        local: &[LocalStiffness],
+        out: &mut CsrMatrix,
+    ) {
         let nt = self.n_triangles;
+        let nc = self.n_contacts;
         let kernel = |e: usize, ke: &mut [f64]| {
             if e < nt {
                 let t = mesh.triangles[e];
                 let p = t.map(|n| mesh.nodes[n as usize]);
-                cst_stiffness(p, &self.tri_dt[e], ke);
-            } else {
+                cst_stiffness(p, &tri[e], ke);
+            } else if e < nt + nc {
                 let c = e - nt;
                 let con = &mesh.contacts[c];
                 let (ml, mm) = (mesh.node_map(con.node_l), mesh.node_map(con.node_m));
                 contact_stiffness(&ml, &mm, con.normal, &local[c], ke);
+            } else {
+                // the rigid blocks' diagonal elements (dynamics) carry no stiffness
+                ke.fill(0.0);
             }
         };
         if local.iter().all(|k| k[0][1] == k[1][0]) {

@@ -179,8 +179,19 @@ fn dispatch(cli: Cli) -> Result<()> {
             }
             prog.stage("meshing");
             let m = mesh::build(&sc);
-            let outcome = analysis::run_with_progress(&sc, &m, backend.as_mut(), &mut prog)
-                .map_err(|e| e.in_file(sc.file.as_deref().unwrap_or(Path::new("scene"))))?;
+            let outcome = if sc.analysis.kind == scene::AnalysisType::Dynamic {
+                let mut w = output::StreamWriter::new(&out, &sc, &m)?;
+                analysis::run_with(&sc, &m, backend.as_mut(), &mut prog, &mut w)
+            } else {
+                analysis::run_with(
+                    &sc,
+                    &m,
+                    backend.as_mut(),
+                    &mut prog,
+                    &mut analysis::dynamics::NoMonitor,
+                )
+            }
+            .map_err(|e| e.in_file(sc.file.as_deref().unwrap_or(Path::new("scene"))))?;
             prog.stage("writing");
             output::write_all(&out, &sc, &m, &outcome)?;
             if !no_plots {
@@ -202,7 +213,12 @@ fn dispatch(cli: Cli) -> Result<()> {
             if !quiet {
                 match &outcome.status {
                     analysis::Status::Stable => println!(
-                        "stable: {} dofs, {} contacts, {:.3} s; results in {}",
+                        "{}: {} dofs, {} contacts, {:.3} s; results in {}",
+                        if sc.analysis.kind == scene::AnalysisType::Dynamic {
+                            "completed"
+                        } else {
+                            "stable"
+                        },
                         outcome.stats.dofs,
                         outcome.stats.contacts,
                         outcome.stats.wall_time_s,

@@ -27,6 +27,20 @@ pub fn block_elastic(m: &Material, plane: Plane) -> [[f64; 3]; 3] {
     elastic_matrix(m.lame_lambda, m.lame_mu, plane)
 }
 
+/// Viscous matrix D_v (Pa·s) of a block material from its viscous Lamé constants
+/// (λ*, μ*), METHOD.md §2 (seed Eq. 8: σ = Dₑ ε + D_v ε̇), with the same plane reduction
+/// as [`elastic_matrix`]. Zero when the material has no viscosity.
+pub fn block_viscous(m: &Material, plane: Plane) -> [[f64; 3]; 3] {
+    if m.viscous_mu == 0.0 && m.viscous_lambda == 0.0 {
+        return [[0.0; 3]; 3];
+    }
+    if m.viscous_mu == 0.0 {
+        // plane stress reduction needs μ* > 0; λ* alone acts as in plane strain
+        return elastic_matrix(m.viscous_lambda, 0.0, Plane::Strain);
+    }
+    elastic_matrix(m.viscous_lambda, m.viscous_mu, plane)
+}
+
 /// Young's modulus E (Pa) and Poisson's ratio ν from the Lamé constants.
 pub fn young_poisson(lambda: f64, mu: f64) -> (f64, f64) {
     (

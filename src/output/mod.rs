@@ -7,6 +7,7 @@ pub mod plot;
 pub mod read;
 pub mod vtk;
 
+use crate::analysis::dynamics::{History, Monitor};
 use crate::analysis::{outcome_motion, Outcome, Status};
 use crate::mesh::{BlockDofs, Mesh};
 use crate::scene::{AnalysisType, Scene};
@@ -142,16 +143,118 @@ pub fn write_figures(
     )
 }
 
-/// Write every result of a run into `dir`.
-pub fn write_all(dir: &Path, scene: &Scene, mesh: &Mesh, out: &Outcome) -> Result<()> {
+fn create_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| {
         Error::new(format!("cannot create the output directory: {e}"))
             .file(dir)
             .fix("choose a writable --out directory")
-    })?;
-    if scene.output.vtk {
-        vtk::write_step(dir, 0, 0.0, scene, mesh, out)?;
-        vtk::write_pvd(dir, &[(0.0, 0)])?;
+    })
+}
+
+/// The text of history.csv: the header line, then one line per row.
+pub fn history_csv(h: &History) -> String {
+    let mut s = h.columns.join(",");
+    s.push('\n');
+    for r in &h.rows {
+        s.push_str(&history_line(r));
+    }
+    s
+}
+
+fn history_line(r: &[f64]) -> String {
+    let mut s = r
+        .iter()
+        .map(|v| format!("{v:.9e}"))
+        .collect::<Vec<_>>()
+        .join(",");
+    s.push('\n');
+    s
+}
+
+/// Streams a dynamic run to `dir` as it goes: history.csv grows by one flushed line per
+/// time step (so an interrupted run keeps its completed steps; [`write_all`] rewrites
+/// it atomically at the end) and a ParaView frame is written every `[output] every`
+/// steps.
+pub struct StreamWriter<'a> {
+    dir: std::path::PathBuf,
+    scene: &'a Scene,
+    mesh: &'a Mesh,
+    file: Option<std::fs::File>,
+    frames: Vec<(f64, usize)>,
+}
+
+impl<'a> StreamWriter<'a> {
+    pub fn new(dir: &Path, scene: &'a Scene, mesh: &'a Mesh) -> Result<Self> {
+        create_dir(dir)?;
+        Ok(StreamWriter {
+            dir: dir.to_path_buf(),
+            scene,
+            mesh,
+            file: None,
+            frames: Vec::new(),
+        })
+    }
+    fn io(&self, e: std::io::Error) -> Error {
+        Error::new(format!("cannot write the history: {e}"))
+            .file(self.dir.join("history.csv"))
+            .fix("check that the output directory is writable and the disk is not full")
+    }
+}
+
+impl Monitor for StreamWriter<'_> {
+    fn start(&mut self, columns: &[String]) -> Result<()> {
+        use std::io::Write;
+        let mut f = std::fs::File::create(self.dir.join("history.csv")).map_err(|e| self.io(e))?;
+        writeln!(f, "{}", columns.join(",")).map_err(|e| self.io(e))?;
+        self.file = Some(f);
+        Ok(())
+    }
+    fn row(&mut self, row: &[f64]) -> Result<()> {
+        use std::io::Write;
+        let line = history_line(row);
+        if let Some(f) = self.file.as_mut() {
+            let r = f.write_all(line.as_bytes()).and_then(|_| f.flush());
+            if let Err(e) = r {
+                return Err(self.io(e));
+            }
+        }
+        Ok(())
+    }
+    fn wants_frames(&self) -> bool {
+        self.scene.output.vtk
+    }
+    fn frame(&mut self, step: usize, time: f64, state: &Outcome) -> Result<()> {
+        vtk::write_step(&self.dir, step, time, self.scene, self.mesh, state)?;
+        self.frames.push((time, step));
+        vtk::write_pvd(&self.dir, &self.frames)
+    }
+}
+
+/// Write every result of a run into `dir`.
+pub fn write_all(dir: &Path, scene: &Scene, mesh: &Mesh, out: &Outcome) -> Result<()> {
+    create_dir(dir)?;
+    match &out.history {
+        None => {
+            if scene.output.vtk {
+                vtk::write_step(dir, 0, 0.0, scene, mesh, out)?;
+                vtk::write_pvd(dir, &[(0.0, 0)])?;
+            }
+        }
+        Some(h) => {
+            write_atomic(&dir.join("history.csv"), history_csv(h).as_bytes())?;
+            if scene.output.vtk {
+                // the frames a monitor wrote, and the final state in any case
+                let last = h.frames.last().copied().unwrap_or((0.0, 0));
+                vtk::write_step(dir, last.1, last.0, scene, mesh, out)?;
+                let written: Vec<(f64, usize)> = h
+                    .frames
+                    .iter()
+                    .copied()
+                    .filter(|f| *f == last || dir.join(format!("blocks_{:04}.vtu", f.1)).exists())
+                    .collect();
+                vtk::write_pvd(dir, &written)?;
+            }
+        }
     }
     if let Some(c) = &out.capacity_curve {
         write_atomic(&dir.join("curve.csv"), curve_csv(c).as_bytes())?;

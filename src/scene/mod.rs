@@ -6,6 +6,7 @@
 
 pub mod examples;
 pub mod generate;
+pub mod ground_motion;
 pub mod parse;
 
 pub use parse::{load, parse_str};
@@ -148,6 +149,8 @@ pub struct Analysis {
     /// Dynamic: time step and duration, s.
     pub dt: Option<f64>,
     pub duration: Option<f64>,
+    /// Dynamic: the ground acceleration (`ground_motion`), if any.
+    pub ground_motion: Option<ground_motion::GroundMotion>,
     /// The `[analysis]` keys not interpreted by the foundation (ground motion, strategies);
     /// kept verbatim for the drivers that read them.
     pub extra: toml::Table,
@@ -160,6 +163,8 @@ pub struct Output {
     pub track: Vec<String>,
     /// Write ParaView files (default true).
     pub vtk: bool,
+    /// Dynamic: a ParaView frame every this many time steps (default 1).
+    pub every: usize,
 }
 
 /// A validated scene.

@@ -99,6 +99,7 @@ struct RawLoad {
 struct RawOutput {
     track: Option<Vec<String>>,
     vtk: Option<bool>,
+    every: Option<i64>,
 }
 
 /// Keys of `[analysis]` (the drivers of later analysis types read the rest from `extra`).
@@ -117,6 +118,11 @@ const ANALYSIS_KEYS: &[&str] = &[
     "initial_step",
     "bracket",
     "line_search",
+    "integrator",
+    "alpha",
+    "rho_inf",
+    "rayleigh",
+    "initial",
 ];
 
 /// Read and validate a scene file.
@@ -804,13 +810,14 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
     }
 
     // [analysis]
-    let analysis = parse_analysis(&src, raw.analysis.as_ref())?;
+    let analysis = parse_analysis(&src, raw.analysis.as_ref(), file)?;
 
     // [output]
     let output = match &raw.output {
         None => Output {
             track: vec![],
             vtk: true,
+            every: 1,
         },
         Some(o) => {
             let at = o.span().start;
@@ -826,9 +833,19 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
                     ));
                 }
             }
+            let every = o.every.unwrap_or(1);
+            if every < 1 {
+                return Err(err_at(
+                    src.key_line(at, "every"),
+                    "[output] key 'every'",
+                    format!("every must be a whole number of steps ≥ 1, not {every}"),
+                    "for example every = 10 (a ParaView frame every 10 time steps)",
+                ));
+            }
             Output {
                 track,
                 vtk: o.vtk.unwrap_or(true),
+                every: every as usize,
             }
         }
     };
@@ -890,7 +907,11 @@ fn check_value(
     ))
 }
 
-fn parse_analysis(src: &Src, a: Option<&Spanned<toml::Table>>) -> Result<Analysis> {
+fn parse_analysis(
+    src: &Src,
+    a: Option<&Spanned<toml::Table>>,
+    file: Option<&Path>,
+) -> Result<Analysis> {
     let Some(a) = a else {
         return Ok(Analysis {
             kind: AnalysisType::Static,
@@ -899,6 +920,7 @@ fn parse_analysis(src: &Src, a: Option<&Spanned<toml::Table>>) -> Result<Analysi
             direction: 1.0,
             dt: None,
             duration: None,
+            ground_motion: None,
             extra: toml::Table::new(),
         });
     };
@@ -1010,6 +1032,35 @@ fn parse_analysis(src: &Src, a: Option<&Spanned<toml::Table>>) -> Result<Analysi
             ));
         }
     }
+    let ground_motion = match t.get("ground_motion") {
+        None => None,
+        Some(v) => {
+            // relative record names are taken from the scene's directory (not for
+            // built-in scenes, named "example:NAME")
+            let base = file
+                .filter(|f| f.exists())
+                .map(|f| f.parent().unwrap_or(Path::new("")).to_path_buf());
+            let gm = ground_motion::from_toml(v, base.as_deref()).map_err(|e| {
+                let place = match &e.at {
+                    Some((f, Some(l))) => {
+                        format!("[analysis] ground_motion: record {}:{l}", f.display())
+                    }
+                    Some((f, None)) => format!("[analysis] ground_motion: record {}", f.display()),
+                    None => "[analysis] key 'ground_motion'".to_string(),
+                };
+                err_at(src.key_line(at, "ground_motion"), place, e.what, e.fix)
+            })?;
+            if kind != AnalysisType::Dynamic {
+                return Err(err_at(
+                    src.key_line(at, "ground_motion"),
+                    "[analysis] key 'ground_motion'",
+                    "a ground motion needs type = \"dynamic\"",
+                    "set type = \"dynamic\" with dt and duration, or remove ground_motion",
+                ));
+            }
+            Some(gm)
+        }
+    };
     let mut extra = t.clone();
     for k in [
         "type",
@@ -1018,6 +1069,7 @@ fn parse_analysis(src: &Src, a: Option<&Spanned<toml::Table>>) -> Result<Analysi
         "direction",
         "dt",
         "duration",
+        "ground_motion",
     ] {
         extra.remove(k);
     }
@@ -1028,6 +1080,7 @@ fn parse_analysis(src: &Src, a: Option<&Spanned<toml::Table>>) -> Result<Analysi
         direction,
         dt,
         duration,
+        ground_motion,
         extra,
     })
 }

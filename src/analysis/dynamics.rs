@@ -1,0 +1,1032 @@
+//! Implicit dynamic analysis (METHOD.md §6): M ü + C u̇ + F_int(u) = F(t), seed Eq. 12,
+//! in the frame of the ground, F = gravity + `[[load]]` forces − M ι a_g(t).
+//!
+//! Time integration by the generalized-α family (Chung and Hulbert 1993), which holds
+//! Newmark's average acceleration (α_m = α_f = 0, β = ¼, γ = ½), HHT-α (Hilber, Hughes
+//! and Taylor 1977: α_m = 0, α_f = α, γ = ½ + α, β = (1 + α)²/4) and generalized-α from
+//! the spectral radius ρ∞ (α_m = (2ρ∞ − 1)/(ρ∞ + 1), α_f = ρ∞/(ρ∞ + 1),
+//! γ = ½ − α_m + α_f, β = ¼ (1 − α_m + α_f)²). With a nonlinear internal force the
+//! balance of a step is taken between the forces at its two ends (the form of OpenSees'
+//! HHT):
+//!
+//!   (1−α_m) M a₁ + α_m M a₀ + (1−α_f)(C v₁ + F_int(u₁)) + α_f (C v₀ + F_int(u₀))
+//!       = (1−α_f) F(t₁) + α_f F(t₀)
+//!
+//! with Newmark's a₁ = (Δu − h v₀ − h²(½ − β) a₀)/(β h²), v₁ = v₀ + h((1−γ) a₀ + γ a₁).
+//! The unknown of a step is its increment Δu, evaluated by the same co-rotational CST
+//! and contact return map as the static driver ([`evaluate`]); the contact states are
+//! iterated within the step with the secant stiffness (METHOD.md §4), the effective
+//! matrix being (1−α_m)/(βh²) M + (1−α_f) γ/(βh) C + (1−α_f) K_s — positive definite
+//! even when blocks separate, thanks to the mass. The geometry is updated after every
+//! converged step (updated Lagrangian); a step that does not converge is halved.
+//!
+//! Damping C: the Kelvin–Voigt viscosities of the blocks (D_v from λ*, μ*) and of the
+//! contacts (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h, acting like the secant springs: both
+//! when a contact sticks, cₙ only when it slips, none when it is open), plus the optional
+//! Rayleigh a₀ M + a₁ K_s.
+//!
+//! Energy audit (J, all in the ground's frame): kinetic ½ vᵀMv; elastic energy of the
+//! blocks ½ ∫ σᵀ Dₑ⁻¹ σ and of the contacts ½ (Fₙ²/kₙ + Fₛ²/kₛ); viscous dissipation
+//! Σ Δuᵀ (C v)ₘ; friction dissipation Σ F̄ₛ · (Δδₛ − ΔFₛ/kₛ) per contact (the normal
+//! band, with its opening remembered, is elastic); work of gravity and loads Σ Δuᵀ F_static; work
+//! of the ground motion Σ Δuᵀ (−M ι a_g)ₘ, with (·)ₘ the mean over the step. The balance
+//! error is kinetic + elastic + dissipated − work: zero up to the iteration tolerance
+//! for Newmark's average acceleration (which conserves energy); HHT and generalized-α
+//! add their numerical dissipation to it.
+//!
+//! Contacts are the ones found in the initial geometry ([`Mesh::contacts`]); the driver
+//! keeps the pattern, and with it the symbolic factorization, for the whole run. A
+//! re-detection of contacts between steps would rebuild [`System`] and the buffers in
+//! [`Dynamics::retopologize`] — the seam left for large motions with new contacts.
+
+use super::config::{evaluate, secant_local, Committed, Trial};
+use super::{fit_motion, Outcome, Stats, Status};
+use crate::assembly::{loads, mass, LocalStiffness, System};
+use crate::geometry::polygon::Point;
+use crate::material::{block_elastic, ContactLaw, ContactSprings, ContactState, MohrCoulomb};
+use crate::mesh::{BlockDofs, Mesh};
+use crate::scene::Scene;
+use crate::solve::LinearBackend;
+use crate::{Error, Result};
+use dfem_kernels::CsrMatrix;
+use std::time::Instant;
+
+/// Keys of `[analysis]` read by this driver (besides `dt`, `duration`, `ground_motion`).
+pub const KEYS: &[&str] = &[
+    "integrator",
+    "alpha",
+    "rho_inf",
+    "rayleigh",
+    "tolerance",
+    "max_iterations",
+    "max_cuts",
+    "initial",
+];
+
+/// Open/closed changes of a contact within a step after which its normal spring stays
+/// in the matrix (see [`Dynamics::step`]).
+const FLIPS_BEFORE_ELASTIC: u32 = 2;
+/// Factor on that spring per iteration the contact stays open.
+const OPEN_WEIGHT_DECAY: f64 = 0.1;
+
+/// Parameters of a member of the generalized-α family.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scheme {
+    pub alpha_m: f64,
+    pub alpha_f: f64,
+    pub beta: f64,
+    pub gamma: f64,
+}
+
+impl Scheme {
+    /// Newmark's average acceleration (trapezoidal rule): no numerical damping.
+    pub fn newmark() -> Scheme {
+        Scheme {
+            alpha_m: 0.0,
+            alpha_f: 0.0,
+            beta: 0.25,
+            gamma: 0.5,
+        }
+    }
+    /// HHT-α, 0 ≤ α ≤ ⅓ (Hilber's α with the opposite sign).
+    pub fn hht(alpha: f64) -> Scheme {
+        Scheme {
+            alpha_m: 0.0,
+            alpha_f: alpha,
+            beta: 0.25 * (1.0 + alpha).powi(2),
+            gamma: 0.5 + alpha,
+        }
+    }
+    /// Generalized-α with spectral radius ρ∞ ∈ [0, 1] at infinite frequency.
+    pub fn generalized_alpha(rho_inf: f64) -> Scheme {
+        let am = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0);
+        let af = rho_inf / (rho_inf + 1.0);
+        Scheme {
+            alpha_m: am,
+            alpha_f: af,
+            beta: 0.25 * (1.0 - am + af).powi(2),
+            gamma: 0.5 - am + af,
+        }
+    }
+}
+
+/// Settings of the dynamic driver (`[analysis]` keys).
+#[derive(Debug, Clone)]
+pub struct Settings {
+    pub scheme: Scheme,
+    pub dt: f64,
+    pub duration: f64,
+    /// Rayleigh coefficients a₀ (1/s) and a₁ (s).
+    pub rayleigh: [f64; 2],
+    pub tolerance: f64,
+    pub max_iterations: usize,
+    pub max_cuts: usize,
+    /// Start from the elastic equilibrium of gravity (`initial = "static"`, default) or
+    /// from zero contact forces with gravity applied at t = 0 (`initial = "rest"`).
+    pub preload: bool,
+}
+
+impl Settings {
+    pub fn from_scene(scene: &Scene) -> Result<Settings> {
+        let x = &scene.analysis.extra;
+        let place = |k: &str| format!("[analysis] key '{k}'");
+        let num = |k: &str, d: f64, lo: f64, hi: f64| super::analysis_number(scene, k, d, lo, hi);
+        let scheme = match x.get("integrator").map(|v| v.as_str()) {
+            None | Some(Some("hht")) => Scheme::hht(num("alpha", 0.05, 0.0, 1.0 / 3.0)?),
+            Some(Some("newmark")) => Scheme::newmark(),
+            Some(Some("generalized-alpha")) => {
+                Scheme::generalized_alpha(num("rho_inf", 0.8, 0.0, 1.0)?)
+            }
+            _ => {
+                return Err(Error::new("unknown integrator")
+                    .place(place("integrator"))
+                    .fix("use \"newmark\", \"hht\" or \"generalized-alpha\""))
+            }
+        };
+        let rayleigh = match x.get("rayleigh") {
+            None => [0.0, 0.0],
+            Some(v) => {
+                let r: Option<Vec<f64>> = v.as_array().map(|a| {
+                    a.iter()
+                        .map(|v| {
+                            v.as_float()
+                                .or_else(|| v.as_integer().map(|i| i as f64))
+                                .unwrap_or(f64::NAN)
+                        })
+                        .collect()
+                });
+                match r {
+                    Some(r) if r.len() == 2 && r.iter().all(|c| c.is_finite() && *c >= 0.0) => {
+                        [r[0], r[1]]
+                    }
+                    _ => {
+                        return Err(Error::new(
+                            "'rayleigh' must be two non-negative numbers [a0, a1]",
+                        )
+                        .place(place("rayleigh"))
+                        .fix("for example rayleigh = [0.1, 0.001] (C = a0 M + a1 K)"))
+                    }
+                }
+            }
+        };
+        Ok(Settings {
+            scheme,
+            dt: scene.analysis.dt.unwrap_or(0.01),
+            duration: scene.analysis.duration.unwrap_or(0.0),
+            rayleigh,
+            tolerance: num("tolerance", 1e-6, 1e-14, 0.1)?,
+            max_iterations: num("max_iterations", 100.0, 1.0, 1e6)? as usize,
+            max_cuts: num("max_cuts", 6.0, 0.0, 30.0)? as usize,
+            preload: match x.get("initial").map(|v| v.as_str()) {
+                None | Some(Some("static")) => true,
+                Some(Some("rest")) => false,
+                _ => {
+                    return Err(Error::new("unknown initial state")
+                        .place(place("initial"))
+                        .fix("use \"static\" (elastic equilibrium of gravity) or \"rest\" (no contact force at t = 0)"))
+                }
+            },
+        })
+    }
+}
+
+/// The time history of a dynamic run: `columns` names each value of a row.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct History {
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+    /// ParaView frames due: (time s, step number).
+    pub frames: Vec<(f64, usize)>,
+}
+
+/// Receives the results of a run as they are computed (the output writer streams them
+/// to disk, so that an interrupted run keeps its completed steps).
+pub trait Monitor {
+    /// The history columns, before the first row.
+    fn start(&mut self, _columns: &[String]) -> Result<()> {
+        Ok(())
+    }
+    /// One history row (the initial state, then every completed time step).
+    fn row(&mut self, _row: &[f64]) -> Result<()> {
+        Ok(())
+    }
+    /// Whether [`Monitor::frame`] wants full states (building them costs a copy).
+    fn wants_frames(&self) -> bool {
+        false
+    }
+    /// The full state at a frame (every `[output] every` steps).
+    fn frame(&mut self, _step: usize, _time: f64, _state: &Outcome) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// A monitor that keeps nothing (the history is also in the outcome).
+pub struct NoMonitor;
+impl Monitor for NoMonitor {}
+
+/// Energy terms (J), see the module documentation.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Energy {
+    pub kinetic: f64,
+    pub elastic: f64,
+    pub viscous: f64,
+    pub contact: f64,
+    pub work_static: f64,
+    pub work_ground: f64,
+    /// Elastic energy of the initial state (the gravity pre-load).
+    pub elastic0: f64,
+}
+
+impl Energy {
+    /// kinetic + elastic + dissipated − external work.
+    pub fn error(&self) -> f64 {
+        self.kinetic + self.elastic - self.elastic0 + self.viscous + self.contact
+            - self.work_static
+            - self.work_ground
+    }
+}
+
+/// The dynamic model being integrated.
+pub struct Dynamics<'a> {
+    scene: &'a Scene,
+    mesh0: &'a Mesh,
+    pub settings: Settings,
+    system: System,
+    law: MohrCoulomb,
+    springs: Vec<ContactSprings>,
+    /// Contact viscosities (cₙ, cₛ) (N·s/m).
+    visc: Vec<ContactSprings>,
+    area: Vec<f64>,
+    cur: Mesh,
+    committed: Committed,
+    /// Velocity (m/s, rad/s) and acceleration (m/s², rad/s²) of the unknowns.
+    v: Vec<f64>,
+    a: Vec<f64>,
+    /// Internal and damping forces (N) at the last converged state.
+    f_int: Vec<f64>,
+    f_visc: Vec<f64>,
+    mass: Vec<f64>,
+    iota: [Vec<f64>; 2],
+    f_static: Vec<f64>,
+    kbuf: CsrMatrix,
+    cbuf: Option<CsrMatrix>,
+    diag: Vec<usize>,
+    /// Dₑ⁻¹ (1/Pa) of each triangle's material (elastic energy).
+    compliance: Vec<[[f64; 3]; 3]>,
+    backend: &'a mut dyn LinearBackend,
+    pub stats: Stats,
+    pub energy: Energy,
+    pub time: f64,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+fn invert3(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            let (a0, a1) = ((j + 1) % 3, (j + 2) % 3);
+            let (b0, b1) = ((i + 1) % 3, (i + 2) % 3);
+            (m[a0][b0] * m[a1][b1] - m[a0][b1] * m[a1][b0]) / det
+        })
+    })
+}
+
+/// A converged step, ready to commit.
+struct Accepted {
+    trial: Trial,
+    v: Vec<f64>,
+    a: Vec<f64>,
+    f_visc: Vec<f64>,
+    h: f64,
+    ground: [f64; 2],
+}
+
+impl<'a> Dynamics<'a> {
+    pub fn new(
+        scene: &'a Scene,
+        mesh: &'a Mesh,
+        backend: &'a mut dyn LinearBackend,
+    ) -> Result<Dynamics<'a>> {
+        let settings = Settings::from_scene(scene)?;
+        let system = System::for_dynamics(scene, mesh);
+        let joint = scene.joints.get(scene.contacts.joint);
+        let law = joint.map(MohrCoulomb::from_joint).unwrap_or(MohrCoulomb {
+            elastic: crate::material::ElasticBand {
+                normal_modulus: 0.0,
+                shear_modulus: 0.0,
+                band: 1.0,
+            },
+            tan_phi: 0.0,
+            cohesion: 0.0,
+            tensile_strength: 0.0,
+        });
+        let t = scene.model.thickness;
+        let area: Vec<f64> = mesh.contacts.iter().map(|c| c.length * t).collect();
+        let springs = area.iter().map(|&a| law.springs(a)).collect();
+        let visc = area
+            .iter()
+            .map(|&a| match joint {
+                Some(j) => ContactSprings {
+                    kn: j.normal_viscosity * a / j.band,
+                    ks: j.shear_viscosity * a / j.band,
+                },
+                None => ContactSprings { kn: 0.0, ks: 0.0 },
+            })
+            .collect::<Vec<_>>();
+        let mass = mass::lumped(scene, mesh);
+        let iota = mass::influence(mesh);
+        let g = scene.model.gravity;
+        let mut f_static: Vec<f64> = (0..mesh.n_dofs)
+            .map(|i| mass[i] * (iota[0][i] * g[0] + iota[1][i] * g[1]))
+            .collect();
+        for (f, l) in f_static.iter_mut().zip(loads::applied(scene, mesh)) {
+            *f += l;
+        }
+        let viscous_blocks = mesh.tri_block.iter().any(|&b| {
+            let m = &scene.materials[scene.blocks[b as usize].material];
+            m.viscous_lambda > 0.0 || m.viscous_mu > 0.0
+        });
+        let viscous_contacts = visc.iter().any(|c| c.kn > 0.0 || c.ks > 0.0);
+        let pattern = system.plan.pattern().clone();
+        let cbuf = (viscous_blocks || viscous_contacts).then(|| CsrMatrix::zeros(pattern.clone()));
+        let compliance = mesh
+            .tri_block
+            .iter()
+            .map(|&b| {
+                invert3(block_elastic(
+                    &scene.materials[scene.blocks[b as usize].material],
+                    scene.model.plane,
+                ))
+            })
+            .collect();
+        let n = mesh.n_dofs;
+        let mut d = Dynamics {
+            scene,
+            mesh0: mesh,
+            settings,
+            diag: pattern.diagonal_positions(),
+            kbuf: CsrMatrix::zeros(pattern),
+            cbuf,
+            system,
+            law,
+            springs,
+            visc,
+            area,
+            cur: mesh.clone(),
+            committed: Committed::zero(mesh),
+            v: vec![0.0; n],
+            a: vec![0.0; n],
+            f_int: vec![0.0; n],
+            f_visc: vec![0.0; n],
+            mass,
+            iota,
+            f_static,
+            compliance,
+            backend,
+            stats: Stats {
+                dofs: n,
+                contacts: mesh.contacts.len(),
+                triangles: mesh.triangles.len(),
+                ..Default::default()
+            },
+            energy: Energy::default(),
+            time: 0.0,
+        };
+        if d.settings.preload {
+            d.preload()?;
+        }
+        let f0 = d.f_ext(0.0);
+        let r0: Vec<f64> = (0..n).map(|i| f0[i] - d.f_int[i]).collect();
+        d.a = (0..n).map(|i| r0[i] / d.mass[i]).collect();
+        if d.settings.preload {
+            // the initial acceleration seen by the first step: (M + β h² K_s) a₀ = r₀.
+            // The soft motions (a sliding block) get M⁻¹ r₀; the stiff ones (a contact
+            // pressed by the out-of-balance left by the return to the strength) get ≈ 0,
+            // as the contacts adjust within the first step
+            let h = d.settings.dt;
+            let beta = d.settings.scheme.beta;
+            let local: Vec<LocalStiffness> = (0..d.springs.len())
+                .map(|k| secant_local(d.springs[k], d.committed.state[k]))
+                .collect();
+            d.system.stiffness_into(&d.cur, &local, &mut d.kbuf);
+            d.kbuf.values.iter_mut().for_each(|k| *k *= beta * h * h);
+            for (i, &p) in d.diag.iter().enumerate() {
+                d.kbuf.values[p] += d.mass[i];
+            }
+            let mut x = r0;
+            if d.backend.factorize(&d.kbuf).is_ok()
+                && d.backend.solve(&mut x).is_ok()
+                && x.iter().all(|v| v.is_finite())
+            {
+                d.a = x;
+            }
+        }
+        Ok(d)
+    }
+
+    /// The initial state: the elastic equilibrium K₀ u₀ = F_static of gravity and loads
+    /// (every contact sticking, no strength limit), then the contact forces returned to
+    /// their strength. Contacts that carry the weight from t = 0 do not bounce (the
+    /// chatter of stiff contacts started without force), and a block whose friction
+    /// cannot hold it starts sliding with the right acceleration. Skipped when K₀ is
+    /// singular (a block that touches nothing).
+    fn preload(&mut self) -> Result<()> {
+        let local: Vec<LocalStiffness> = self
+            .springs
+            .iter()
+            .map(|&k| crate::assembly::diagonal(k))
+            .collect();
+        self.system
+            .stiffness_into(&self.cur, &local, &mut self.kbuf);
+        let mut x = self.f_static.clone();
+        let ok = self.backend.factorize(&self.kbuf).is_ok()
+            && self.backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO
+            && self.backend.solve(&mut x).is_ok()
+            && x.iter().all(|v| v.is_finite());
+        if !ok || norm(&self.f_static) == 0.0 {
+            return Ok(());
+        }
+        let presc = vec![[0.0; 2]; self.cur.blocks.len()];
+        let el = evaluate(
+            &self.system,
+            &self.cur,
+            &self.committed,
+            &self.law.elastic,
+            &self.area,
+            self.scene.model.thickness,
+            &x,
+            &presc,
+        );
+        self.committed.u = x;
+        self.committed.stress = el.stress;
+        self.committed.force = el.force;
+        self.cur = el.mesh;
+        // the same state returned to the strength envelope
+        let back = self.trial(&vec![0.0; self.cur.n_dofs]);
+        self.committed.force = back.force;
+        self.committed.state = back.state;
+        self.committed.stress = back.stress;
+        self.f_int = back.f_int;
+        self.energy.elastic =
+            self.elastic_energy(&self.cur, &self.committed.stress, &self.committed.force);
+        self.energy.elastic0 = self.energy.elastic;
+        Ok(())
+    }
+
+    /// The seam for contact re-detection (large motions): after new contacts are found
+    /// in the current configuration, the system (pattern, scatter maps), the contact
+    /// springs and areas, and the buffers are rebuilt here, and the committed contact
+    /// forces and states mapped by contact identity. Not called yet: the contacts of the
+    /// initial geometry are kept for the whole run.
+    #[allow(dead_code)]
+    fn retopologize(&mut self) {
+        let t = self.scene.model.thickness;
+        self.system = System::for_dynamics(self.scene, &self.cur);
+        self.area = self.cur.contacts.iter().map(|c| c.length * t).collect();
+        self.springs = self.area.iter().map(|&a| self.law.springs(a)).collect();
+        let pattern = self.system.plan.pattern().clone();
+        self.diag = pattern.diagonal_positions();
+        self.kbuf = CsrMatrix::zeros(pattern.clone());
+        if self.cbuf.is_some() {
+            self.cbuf = Some(CsrMatrix::zeros(pattern));
+        }
+    }
+
+    /// The ground acceleration vector (m/s²) at time t.
+    pub fn ground(&self, t: f64) -> [f64; 2] {
+        self.scene
+            .analysis
+            .ground_motion
+            .as_ref()
+            .map_or([0.0; 2], |g| g.vector(t))
+    }
+
+    /// Ground-motion load −M ι a_g(t) (N).
+    fn f_ground(&self, ag: [f64; 2]) -> Vec<f64> {
+        (0..self.mass.len())
+            .map(|i| -self.mass[i] * (self.iota[0][i] * ag[0] + self.iota[1][i] * ag[1]))
+            .collect()
+    }
+
+    /// External force F(t) (N): gravity and loads, and the ground-motion load.
+    fn f_ext(&self, t: f64) -> Vec<f64> {
+        let fg = self.f_ground(self.ground(t));
+        self.f_static.iter().zip(&fg).map(|(a, b)| a + b).collect()
+    }
+
+    fn trial(&self, dq: &[f64]) -> Trial {
+        let presc = vec![[0.0; 2]; self.cur.blocks.len()];
+        evaluate(
+            &self.system,
+            &self.cur,
+            &self.committed,
+            &self.law,
+            &self.area,
+            self.scene.model.thickness,
+            dq,
+            &presc,
+        )
+    }
+
+    /// Try one step of length h from the committed state; `None` when it does not
+    /// converge (the caller cuts it).
+    fn step(&mut self, h: f64) -> Result<Option<Accepted>> {
+        let s = self.settings.scheme;
+        let (am, af, beta, gamma) = (s.alpha_m, s.alpha_f, s.beta, s.gamma);
+        let [ra0, ra1] = self.settings.rayleigh;
+        let n = self.cur.n_dofs;
+        let t0 = self.time;
+        let (g0, g1) = (self.ground(t0), self.ground(t0 + h));
+        let (fg0, fg1) = (self.f_ground(g0), self.f_ground(g1));
+        let fe: Vec<f64> = (0..n)
+            .map(|i| self.f_static[i] + (1.0 - af) * fg1[i] + af * fg0[i])
+            .collect();
+        let c0 = 1.0 / (beta * h * h);
+        let c1 = gamma / (beta * h);
+        // start from the committed state (the first solve is the linearized step: a
+        // predictor that moves stiff contacts would start far from the answer)
+        let mut dq: Vec<f64> = vec![0.0; n];
+        let mut trial = self.trial(&dq);
+        let mut prev_state = trial.state.clone();
+        let mut prev_force = trial.force.clone();
+        let mut flips = vec![0u32; trial.state.len()];
+        let mut weight = vec![1.0f64; trial.state.len()];
+        let size = {
+            let b = crate::geometry::polygon::bbox(&self.cur.nodes);
+            (b[2] - b[0]).hypot(b[3] - b[1]).max(1e-9)
+        };
+        for it in 0..self.settings.max_iterations {
+            self.stats.iterations += 1;
+            let a1: Vec<f64> = (0..n)
+                .map(|i| c0 * (dq[i] - h * self.v[i] - h * h * (0.5 - beta) * self.a[i]))
+                .collect();
+            let v1: Vec<f64> = (0..n)
+                .map(|i| self.v[i] + h * ((1.0 - gamma) * self.a[i] + gamma * a1[i]))
+                .collect();
+            // secant stiffness and damping of the trial states, in the trial geometry. A
+            // contact that keeps opening and closing within the step sits at the kink of
+            // its law (touching with no force: the chatter of a stiff contact), where the
+            // secant iteration cycles between the open and the closed linearization; its
+            // normal spring then stays in the matrix, weakened by a factor w that drops
+            // while the contact stays open (so that a contact that really separates is
+            // soon left free) and returns to 1 when it closes.
+            for k in 0..flips.len() {
+                let open = trial.state[k] == ContactState::Open;
+                if it > 0 && open != (prev_state[k] == ContactState::Open) {
+                    flips[k] += 1;
+                }
+                if flips[k] >= FLIPS_BEFORE_ELASTIC {
+                    weight[k] = if open {
+                        weight[k] * OPEN_WEIGHT_DECAY
+                    } else {
+                        1.0
+                    };
+                }
+            }
+            // at the first iteration, the states of the last step (a contact exactly at
+            // its friction limit evaluates as sticking, but it was slipping)
+            let states = if it == 0 {
+                &self.committed.state
+            } else {
+                &trial.state
+            };
+            let local: Vec<LocalStiffness> = (0..self.springs.len())
+                .map(|k| {
+                    let mut l = secant_local(self.springs[k], states[k]);
+                    if flips[k] >= FLIPS_BEFORE_ELASTIC {
+                        l[0][0] = weight[k] * self.springs[k].kn;
+                    }
+                    l
+                })
+                .collect();
+            self.system
+                .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+            let mut fv1: Vec<f64> = (0..n).map(|i| ra0 * self.mass[i] * v1[i]).collect();
+            if ra1 > 0.0 {
+                let mut kv = vec![0.0; n];
+                self.kbuf.mul_vec(&v1, &mut kv);
+                for (f, x) in fv1.iter_mut().zip(&kv) {
+                    *f += ra1 * x;
+                }
+            }
+            if let Some(cbuf) = self.cbuf.as_mut() {
+                let lc: Vec<LocalStiffness> = (0..self.visc.len())
+                    .map(|k| secant_local(self.visc[k], trial.state[k]))
+                    .collect();
+                self.system.damping_into(&trial.mesh, &lc, cbuf);
+                let mut cv = vec![0.0; n];
+                cbuf.mul_vec(&v1, &mut cv);
+                for (f, x) in fv1.iter_mut().zip(&cv) {
+                    *f += x;
+                }
+            }
+            let inertia: Vec<f64> = (0..n)
+                .map(|i| self.mass[i] * ((1.0 - am) * a1[i] + am * self.a[i]))
+                .collect();
+            let r: Vec<f64> = (0..n)
+                .map(|i| {
+                    fe[i]
+                        - inertia[i]
+                        - (1.0 - af) * (fv1[i] + trial.f_int[i])
+                        - af * (self.f_visc[i] + self.f_int[i])
+                })
+                .collect();
+            let rn = norm(&r);
+            let scale = norm(&fe)
+                .max(norm(&inertia))
+                .max(norm(&trial.f_int))
+                .max(1e-300);
+            let negligible = self.settings.tolerance * scale;
+            let changed = trial
+                .state
+                .iter()
+                .zip(&prev_state)
+                .enumerate()
+                .any(|(k, (x, y))| {
+                    x != y
+                        && (trial.force[k][0].hypot(trial.force[k][1]) > negligible
+                            || prev_force[k][0].hypot(prev_force[k][1]) > negligible)
+                });
+            if std::env::var_os("DFEM_TRACE").is_some() {
+                eprintln!("t {t0:.4} h {h:.3e} it {it} residual {:.3e}", rn / scale);
+            }
+            if it > 0 && rn <= self.settings.tolerance * scale && !changed {
+                return Ok(Some(Accepted {
+                    trial,
+                    v: v1,
+                    a: a1,
+                    f_visc: fv1,
+                    h,
+                    ground: g1,
+                }));
+            }
+            prev_state = trial.state.clone();
+            prev_force = trial.force.clone();
+            // effective matrix (1−α_m) c₀ M + (1−α_f) c₁ C + (1−α_f) K_s
+            let kf = (1.0 - af) * (1.0 + c1 * ra1);
+            let mf = (1.0 - am) * c0 + (1.0 - af) * c1 * ra0;
+            match &self.cbuf {
+                Some(c) => {
+                    for (k, cv) in self.kbuf.values.iter_mut().zip(&c.values) {
+                        *k = kf * *k + (1.0 - af) * c1 * cv;
+                    }
+                }
+                None => self.kbuf.values.iter_mut().for_each(|k| *k *= kf),
+            }
+            for (i, &p) in self.diag.iter().enumerate() {
+                self.kbuf.values[p] += mf * self.mass[i];
+            }
+            let mut x = r;
+            let ok = self.backend.factorize(&self.kbuf).is_ok()
+                && self.backend.solve(&mut x).is_ok()
+                && x.iter().all(|v| v.is_finite());
+            if !ok {
+                return Ok(None);
+            }
+            for (d, x) in dq.iter_mut().zip(&x) {
+                *d += x;
+            }
+            let dmax = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if !dmax.is_finite() || dmax > 0.5 * size {
+                return Ok(None);
+            }
+            trial = self.trial(&dq);
+        }
+        Ok(None)
+    }
+
+    /// Elastic energy (J) of a state: blocks ½ ∫ σᵀ Dₑ⁻¹ σ, contacts ½ (Fₙ²/kₙ + Fₛ²/kₛ).
+    fn elastic_energy(&self, mesh: &Mesh, stress: &[[f64; 3]], force: &[[f64; 2]]) -> f64 {
+        let t = self.scene.model.thickness;
+        let mut e = 0.0;
+        for (k, s) in stress.iter().enumerate() {
+            let c = &self.compliance[k];
+            let mut q = 0.0;
+            for i in 0..3 {
+                for j in 0..3 {
+                    q += s[i] * c[i][j] * s[j];
+                }
+            }
+            e += 0.5 * q * t * mesh.triangle_area(k);
+        }
+        for (f, k) in force.iter().zip(&self.springs) {
+            if k.kn > 0.0 {
+                e += 0.5 * f[0] * f[0] / k.kn;
+            }
+            if k.ks > 0.0 {
+                e += 0.5 * f[1] * f[1] / k.ks;
+            }
+        }
+        e
+    }
+
+    fn commit(&mut self, acc: Accepted) {
+        let Accepted {
+            trial,
+            v,
+            a,
+            f_visc,
+            h,
+            ground,
+        } = acc;
+        let dq = &trial.dq;
+        let g0 = self.ground(self.time);
+        let (fg0, fg1) = (self.f_ground(g0), self.f_ground(ground));
+        let e = &mut self.energy;
+        e.work_static += dot(dq, &self.f_static);
+        e.work_ground += 0.5 * (dot(dq, &fg0) + dot(dq, &fg1));
+        e.viscous += 0.5 * (dot(dq, &self.f_visc) + dot(dq, &f_visc));
+        // friction: the shear force's work beyond its elastic energy (the normal band
+        // with its opening is elastic: no dissipation)
+        let mut contact = 0.0;
+        for (k, sp) in self.springs.iter().enumerate() {
+            let f0 = self.true_force(k);
+            let (f1, d) = (trial.force[k], trial.rel[k]);
+            if sp.ks > 0.0 && (f0[1] != 0.0 || f1[1] != 0.0) {
+                contact += 0.5 * (f0[1] + f1[1]) * (d[1] - (f1[1] - f0[1]) / sp.ks);
+            }
+        }
+        // work of the blocks' relative motion on the contacts beyond their elastic energy
+        self.energy.contact += contact;
+        self.energy.kinetic = 0.5
+            * (0..v.len())
+                .map(|i| self.mass[i] * v[i] * v[i])
+                .sum::<f64>();
+        self.energy.elastic = self.elastic_energy(&trial.mesh, &trial.stress, &trial.force);
+        for (u, d) in self.committed.u.iter_mut().zip(dq) {
+            *u += d;
+        }
+        self.f_int = trial.f_int;
+        // an open contact keeps its opening, as the normal force it would carry if the
+        // band could pull (Fₙ = kₙ × opening > 0, never applied): the contact law then
+        // closes it only when the opening is taken up, not at the next compressive
+        // increment (a rocking block lands where it lifted off)
+        let mut force = trial.force;
+        for (k, f) in force.iter_mut().enumerate() {
+            if trial.state[k] == ContactState::Open {
+                *f = [
+                    self.committed.force[k][0] + self.springs[k].kn * trial.rel[k][0],
+                    0.0,
+                ];
+            }
+        }
+        self.committed.stress = trial.stress;
+        self.committed.force = force;
+        self.committed.state = trial.state;
+        self.cur = trial.mesh;
+        self.v = v;
+        self.a = a;
+        self.f_visc = f_visc;
+        self.time += h;
+        self.stats.increments += 1;
+    }
+
+    /// Advance to time `target` (s), cutting the step when it does not converge.
+    /// Returns false when even the smallest step fails.
+    fn advance_to(&mut self, target: f64) -> Result<bool> {
+        let hmin = self.settings.dt / 2f64.powi(self.settings.max_cuts as i32);
+        let mut h = target - self.time;
+        while self.time < target - 1e-9 * self.settings.dt {
+            h = h.min(target - self.time);
+            match self.step(h)? {
+                Some(acc) => {
+                    self.commit(acc);
+                    h *= 2.0;
+                }
+                None => {
+                    if h <= hmin * (1.0 + 1e-9) {
+                        return Ok(false);
+                    }
+                    h *= 0.5;
+                }
+            }
+        }
+        self.time = target;
+        Ok(true)
+    }
+
+    /// The force (N) contact `k` carries: the committed one, zero when it is open.
+    fn true_force(&self, k: usize) -> [f64; 2] {
+        if self.committed.state[k] == ContactState::Open {
+            [0.0, 0.0]
+        } else {
+            self.committed.force[k]
+        }
+    }
+
+    /// Centroid displacement (m) and rotation (rad) of a block, relative to the ground.
+    pub fn block_motion(&self, b: usize) -> ([f64; 2], f64) {
+        match self.mesh0.blocks[b].dofs {
+            BlockDofs::Rigid { first, .. } => {
+                let f = first as usize;
+                let u = &self.committed.u;
+                ([u[f], u[f + 1]], u[f + 2])
+            }
+            _ => {
+                let blk = &self.mesh0.blocks[b];
+                let disp: Vec<Point> = blk
+                    .nodes
+                    .clone()
+                    .map(|n| {
+                        let (p, q) = (self.cur.nodes[n as usize], self.mesh0.nodes[n as usize]);
+                        [p[0] - q[0], p[1] - q[1]]
+                    })
+                    .collect();
+                fit_motion(self.mesh0, b, &disp)
+            }
+        }
+    }
+
+    fn outcome(&self, status: Status) -> Outcome {
+        let node_disp = self
+            .cur
+            .nodes
+            .iter()
+            .zip(&self.mesh0.nodes)
+            .map(|(a, b)| [a[0] - b[0], a[1] - b[1]])
+            .collect();
+        Outcome {
+            status,
+            u: self.committed.u.clone(),
+            node_disp,
+            stress: self.committed.stress.clone(),
+            contact_forces: (0..self.committed.force.len())
+                .map(|k| self.true_force(k))
+                .collect(),
+            contact_states: self.committed.state.clone(),
+            stats: self.stats.clone(),
+            load_factor: None,
+            mechanism: None,
+            current: Some(self.cur.clone()),
+            history: None,
+            capacity_curve: None,
+        }
+    }
+}
+
+/// Blocks written to the history: `[output] track`, or every free block.
+pub fn tracked(scene: &Scene, mesh: &Mesh) -> Vec<usize> {
+    if scene.output.track.is_empty() {
+        (0..mesh.blocks.len())
+            .filter(|&b| mesh.blocks[b].dofs != BlockDofs::Fixed)
+            .collect()
+    } else {
+        scene
+            .output
+            .track
+            .iter()
+            .filter_map(|n| scene.block_index(n))
+            .collect()
+    }
+}
+
+/// Names of the columns after the blocks' (documented in docs/scene-reference.md).
+pub const EXTRA_COLUMNS: &[&str] = &[
+    "ground_ax",
+    "ground_ay",
+    "open_contacts",
+    "slipping_contacts",
+    "E_kinetic",
+    "E_elastic",
+    "W_viscous",
+    "W_contact",
+    "W_gravity",
+    "W_ground",
+    "E_error",
+];
+
+/// Run a dynamic analysis, streaming the history and frames to `monitor`.
+pub fn run(
+    scene: &Scene,
+    mesh: &Mesh,
+    backend: &mut dyn LinearBackend,
+    monitor: &mut dyn Monitor,
+) -> Result<Outcome> {
+    let start = Instant::now();
+    let mut d = Dynamics::new(scene, mesh, backend)?;
+    let blocks = tracked(scene, mesh);
+    let mut columns = vec!["t".to_string()];
+    for &b in &blocks {
+        let name = &scene.blocks[b].name;
+        for c in ["ux", "uy", "rz"] {
+            columns.push(format!("{name}.{c}"));
+        }
+    }
+    columns.extend(EXTRA_COLUMNS.iter().map(|s| s.to_string()));
+    monitor.start(&columns)?;
+    let mut history = History {
+        columns,
+        ..Default::default()
+    };
+    let row = |d: &Dynamics| -> Vec<f64> {
+        let mut r = vec![d.time];
+        for &b in &blocks {
+            let (u, th) = d.block_motion(b);
+            r.extend([u[0], u[1], th]);
+        }
+        let g = d.ground(d.time);
+        let count = |s: ContactState| d.committed.state.iter().filter(|x| **x == s).count() as f64;
+        let e = d.energy;
+        r.extend([
+            g[0],
+            g[1],
+            count(ContactState::Open),
+            count(ContactState::Slip),
+            e.kinetic,
+            e.elastic,
+            e.viscous,
+            e.contact,
+            e.work_static,
+            e.work_ground,
+            e.error(),
+        ]);
+        r
+    };
+    let dt = d.settings.dt;
+    let steps = (d.settings.duration / dt - 1e-9).ceil().max(1.0) as usize;
+    let every = scene.output.every.max(1);
+    let frames = scene.output.vtk;
+    let r0 = row(&d);
+    monitor.row(&r0)?;
+    history.rows.push(r0);
+    if frames {
+        history.frames.push((0.0, 0));
+        if monitor.wants_frames() {
+            monitor.frame(0, 0.0, &d.outcome(Status::Stable))?;
+        }
+    }
+    let mut status = Status::Stable;
+    for k in 1..=steps {
+        let target = (k as f64 * dt).min(d.settings.duration.max(dt));
+        let ok = d.advance_to(target)?;
+        if !ok {
+            status = Status::Failed {
+                reason: format!(
+                    "the time step from t = {:.4} s did not converge even when cut to dt/2^{}: the contacts cannot be resolved (try a smaller dt)",
+                    d.time, d.settings.max_cuts
+                ),
+                blocks: vec![],
+            };
+            break;
+        }
+        let r = row(&d);
+        monitor.row(&r)?;
+        history.rows.push(r);
+        if frames && (k % every == 0 || k == steps) {
+            history.frames.push((d.time, k));
+            if monitor.wants_frames() {
+                monitor.frame(k, d.time, &d.outcome(Status::Stable))?;
+            }
+        }
+    }
+    let bs = d.backend.stats().clone();
+    d.stats.factorizations = bs.numeric_factorizations;
+    d.stats.symbolic_factorizations = bs.symbolic_factorizations;
+    d.stats.min_pivot_ratio = bs.min_pivot_ratio;
+    d.stats.wall_time_s = start.elapsed().as_secs_f64();
+    let mut out = d.outcome(status);
+    out.history = Some(history);
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    #[allow(clippy::needless_range_loop)]
+    fn inverse_of_the_elastic_matrix() {
+        let d = crate::material::elastic_matrix(56e9, 21e9, crate::scene::Plane::Strain);
+        let c = invert3(d);
+        for i in 0..3 {
+            for j in 0..3 {
+                let p: f64 = (0..3).map(|k| d[i][k] * c[k][j]).sum();
+                assert!(
+                    (p - f64::from(u8::from(i == j))).abs() < 1e-12,
+                    "{i} {j} {p}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn family_members() {
+        assert_eq!(Scheme::hht(0.0), Scheme::newmark());
+        // generalized-α with ρ∞ = 1 is the trapezoidal rule at the mid-point
+        let g = Scheme::generalized_alpha(1.0);
+        assert!((g.alpha_m - 0.5).abs() < 1e-15 && (g.alpha_f - 0.5).abs() < 1e-15);
+        assert!((g.gamma - 0.5).abs() < 1e-15 && (g.beta - 0.25).abs() < 1e-15);
+        // ρ∞ = 0: asymptotic annihilation, γ = 3/2, β = 1
+        let g = Scheme::generalized_alpha(0.0);
+        assert!((g.gamma - 1.5).abs() < 1e-15 && (g.beta - 1.0).abs() < 1e-15);
+    }
+}

@@ -44,6 +44,12 @@ pub struct Stats {
     pub reuse_iterations: usize,
     pub wall_time_s: f64,
     pub min_pivot_ratio: f64,
+    /// Stored entries of the last factor of the linear backend (its memory is 8 bytes
+    /// each plus indices); 0 for iterative backends.
+    pub factor_nnz: usize,
+    /// Peak resident memory of the process at the end of the analysis (MB, 10⁶ bytes),
+    /// `None` where the operating system does not tell ([`crate::resources`]).
+    pub peak_memory_mb: Option<f64>,
 }
 
 /// The state of a solved model: unknowns, node displacements, stresses, contact forces.
@@ -127,12 +133,15 @@ pub fn run_with(
             .fix("place the blocks on a fixed block (support = \"fixed\"), or raise [contacts] tolerance if they should touch"));
         }
     }
-    match scene.analysis.kind {
+    let mut out = match scene.analysis.kind {
         AnalysisType::Static | AnalysisType::Capacity => {
             statics::run_with_progress(scene, mesh, backend, progress)
         }
         AnalysisType::Dynamic => dynamics::run(scene, mesh, backend, monitor),
-    }
+    }?;
+    out.stats.factor_nnz = backend.stats().factor_nnz;
+    out.stats.peak_memory_mb = crate::resources::peak_resident_bytes().map(|b| b as f64 / 1e6);
+    Ok(out)
 }
 
 /// The number under `[analysis]` key `k`, `d` when absent; an error naming the key and

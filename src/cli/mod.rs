@@ -52,6 +52,10 @@ enum Command {
         /// load_factor, iterations, residual, elapsed_s) instead of a progress bar.
         #[arg(long)]
         log_json: bool,
+        /// Refuse the scene when its estimated memory exceeds this many MB (default: the
+        /// memory the machine has available).
+        #[arg(long, value_name = "MB")]
+        memory_limit: Option<f64>,
     },
     /// Draw the figures of a finished run again from the files in DIR.
     Plot {
@@ -89,6 +93,38 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+}
+
+/// Refuse a scene whose estimated memory ([`crate::resources::estimate`]) exceeds `limit`
+/// MB, or the memory available on the machine when no limit is given.
+fn check_memory(sc: &scene::Scene, m: &mesh::Mesh, limit: Option<f64>) -> Result<()> {
+    let e = crate::resources::estimate(m);
+    let (limit_b, what) = match limit {
+        Some(mb) if mb.is_finite() && mb > 0.0 => (mb * 1e6, "the --memory-limit"),
+        Some(mb) => {
+            return Err(Error::new(format!(
+                "--memory-limit {mb} is not a positive number of MB"
+            ))
+            .fix("give the limit in MB, for example --memory-limit 4000"))
+        }
+        None => match crate::resources::available_bytes() {
+            Some(b) => (b as f64, "the memory this machine has available"),
+            None => return Ok(()),
+        },
+    };
+    if e.total() <= limit_b {
+        return Ok(());
+    }
+    let mb = |b: f64| b / 1e6;
+    let mut err = Error::new(format!(
+        "the analysis would need about {:.0} MB (elements {:.0}, factor {:.0}, vectors {:.0}, program {:.0}), more than {what} ({:.0} MB)",
+        mb(e.total()), mb(e.elements), mb(e.factor), mb(e.vectors), mb(e.base), mb(limit_b)
+    ))
+    .fix("use rigid blocks (kind = \"rigid\") where deformation does not matter, a coarser mesh_size, fewer blocks, or a machine with more memory");
+    if let Some(f) = &sc.file {
+        err = err.file(f);
+    }
+    Err(err)
 }
 
 /// Entry point of the `dfem` binary.
@@ -166,6 +202,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             no_plots,
             amplification,
             log_json,
+            memory_limit,
         } => {
             threads(n)?;
             check_amplification(amplification)?;
@@ -179,6 +216,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             }
             prog.stage("meshing");
             let m = mesh::build(&sc);
+            check_memory(&sc, &m, memory_limit)?;
             let outcome = if sc.analysis.kind == scene::AnalysisType::Dynamic {
                 let mut w = output::StreamWriter::new(&out, &sc, &m)?;
                 analysis::run_with(&sc, &m, backend.as_mut(), &mut prog, &mut w)
@@ -296,6 +334,12 @@ fn dispatch(cli: Cli) -> Result<()> {
             println!("joints: {}", m.segments.len());
             println!("contacts: {}", m.contacts.len());
             println!("dofs: {}", m.n_dofs);
+            let e = crate::resources::estimate(&m);
+            println!(
+                "estimated memory of the analysis: {:.0} MB (factor {:.0} MB)",
+                e.total() / 1e6,
+                e.factor / 1e6
+            );
             println!("time: {:.3} s", t0.elapsed().as_secs_f64());
             Ok(())
         }

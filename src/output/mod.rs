@@ -89,6 +89,8 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "reused_factorizations": s.reused_factorizations,
             "reuse_iterations": s.reuse_iterations,
             "min_pivot_ratio": s.min_pivot_ratio,
+            "factor_nnz": s.factor_nnz,
+            "peak_memory_mb": s.peak_memory_mb,
             "wall_time_s": s.wall_time_s,
         },
         "warnings": scene.warnings,

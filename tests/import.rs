@@ -132,3 +132,33 @@ fn group_mapping_prefix_and_kind() {
     assert_eq!(sc.blocks[1].support, Support::Free);
     assert_eq!(sc.blocks[1].kind, scene::BlockKind::Rigid);
 }
+
+#[test]
+fn dxf_closed_polylines_give_the_two_squares() {
+    // base: a closed LWPOLYLINE with a vertex in the middle of its bottom edge; top: a
+    // POLYLINE whose last vertex repeats the first; an open LWPOLYLINE and a LINE on layer
+    // "notes" are skipped
+    let b = scene::import::read(&data("two_squares.dxf"), "dxf").unwrap();
+    assert_eq!(b.len(), 2);
+    assert_eq!(
+        (b[0].name.as_str(), b[0].group.as_str()),
+        ("base_1", "base")
+    );
+    assert_eq!((b[1].name.as_str(), b[1].group.as_str()), ("top_1", "top"));
+    same_polygon(&b[0].vertices, &BASE);
+    same_polygon(&b[1].vertices, &TOP);
+    assert!((area(&b[0].vertices) - 1.0).abs() < 1e-12);
+    assert!((area(&b[1].vertices) - 0.25).abs() < 1e-12);
+}
+
+#[test]
+fn an_imported_dxf_drawing_analyses_as_the_same_blocks_in_toml() {
+    let file = data("two_squares.dxf");
+    same_analysis(
+        &format!(
+            "[[import]]\nfile = \"{}\"\nmaterial = \"stone\"\nfixed = [\"base\"]\n",
+            file.display()
+        ),
+        EXPLICIT,
+    );
+}

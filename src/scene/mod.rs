@@ -1,12 +1,14 @@
 //! Scene: the validated model read from a TOML file (`INTERFACE.md`, "Scene file").
 //!
 //! [`parse`] turns text into a [`Scene`], checking everything before any work is done;
-//! [`generate`] expands `[[generate]]` entries into blocks; [`examples`] holds the
+//! [`generate`] expands `[[generate]]` entries into blocks; [`import`] reads blocks from
+//! Gmsh and DXF files (`[[import]]`); [`examples`] holds the
 //! built-in example scenes of `dfem example`.
 
 pub mod examples;
 pub mod generate;
 pub mod ground_motion;
+pub mod import;
 pub mod parse;
 
 pub use parse::{load, parse_str};

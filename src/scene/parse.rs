@@ -3,6 +3,7 @@
 //! the block or key, and the fix (INTERFACE.md, "Exit status").
 
 use super::generate::{self, GenError};
+use super::import;
 use super::*;
 use crate::error::{Error, Result};
 use crate::geometry::overlapping_pairs;
@@ -27,6 +28,8 @@ struct RawScene {
     block: Vec<Spanned<RawBlock>>,
     #[serde(default)]
     generate: Vec<Spanned<toml::Table>>,
+    #[serde(default)]
+    import: Vec<Spanned<RawImport>>,
     contacts: Option<Spanned<RawContacts>>,
     #[serde(default)]
     load: Vec<Spanned<RawLoad>>,
@@ -77,6 +80,19 @@ struct RawBlock {
     kind: Option<String>,
     mesh_size: Option<f64>,
     prescribed: Option<[f64; 2]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawImport {
+    file: Option<String>,
+    format: Option<String>,
+    name: Option<String>,
+    material: Option<String>,
+    materials: Option<std::collections::BTreeMap<String, String>>,
+    fixed: Option<Vec<String>>,
+    kind: Option<String>,
+    mesh_size: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -592,6 +608,24 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
         }
     }
 
+    // [[import]]
+    for (i, im) in raw.import.iter().enumerate() {
+        let at = im.span().start;
+        let made = import_blocks(&src, at, i, im.get_ref(), file, &material_index)?;
+        if blocks.len() + made.len() > MAX_BLOCKS {
+            return Err(err_at(
+                src.line(at),
+                format!("[[import]] #{}", i + 1),
+                format!(
+                    "the scene would have {} blocks, more than the limit of {MAX_BLOCKS}",
+                    blocks.len() + made.len()
+                ),
+                "split the model",
+            ));
+        }
+        blocks.extend(made);
+    }
+
     if blocks.is_empty() {
         return Err(Error::new("the scene has no blocks")
             .line(Some(1))
@@ -863,6 +897,129 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
         file: file.map(Path::to_path_buf),
         warnings,
     })
+}
+
+/// The blocks of one `[[import]]` entry: read the file, give each block the material and
+/// support of its group (`materials`, `fixed`), its kind and mesh size.
+fn import_blocks(
+    src: &Src,
+    at: usize,
+    i: usize,
+    im: &RawImport,
+    scene_file: Option<&Path>,
+    material_index: &dyn Fn(&str, usize, &str) -> Result<usize>,
+) -> Result<Vec<Block>> {
+    let line = src.line(at);
+    let entry = format!("[[import]] #{}", i + 1);
+    let fline = src.key_line(at, "file");
+    let name = im.file.as_deref().ok_or_else(|| {
+        err_at(
+            line,
+            entry.clone(),
+            "key 'file' is missing",
+            "add file = \"blocks.msh\" (a Gmsh mesh) or \"blocks.dxf\" (a DXF drawing)",
+        )
+    })?;
+    // relative names are taken from the scene's directory (as ground-motion records)
+    let path = match scene_file.filter(|f| f.exists()).and_then(|f| f.parent()) {
+        Some(dir) if Path::new(name).is_relative() => dir.join(name),
+        _ => Path::new(name).to_path_buf(),
+    };
+    let format =
+        import::format_of(&path, im.format.as_deref()).ok_or_else(|| match &im.format {
+            Some(f) => err_at(
+                src.key_line(at, "format"),
+                format!("{entry} key 'format'"),
+                format!("unknown format '{f}'"),
+                format!("use one of: {}", import::FORMATS.join(", ")),
+            ),
+            None => err_at(
+                fline,
+                format!("{entry} key 'file'"),
+                format!("cannot tell the format of '{name}' from its extension"),
+                "name a .msh or .dxf file, or add format = \"gmsh\" or \"dxf\"",
+            ),
+        })?;
+    let read = import::read(&path, format).map_err(|e| {
+        let place = match e.line {
+            Some(l) => format!("{entry}: {}:{l}", path.display()),
+            None => format!("{entry}: {}", path.display()),
+        };
+        err_at(fline, place, e.what, e.fix)
+    })?;
+    let groups: Vec<&str> = {
+        let mut g: Vec<&str> = read.iter().map(|b| b.group.as_str()).collect();
+        g.sort_unstable();
+        g.dedup();
+        g
+    };
+    let unknown_group = |key: &str, g: &str| {
+        err_at(
+            src.key_line(at, key),
+            format!("{entry} key '{key}'"),
+            format!("'{}' has no group '{g}'", path.display()),
+            format!("use the groups of the file: {}", groups.join(", ")),
+        )
+    };
+    let default = match &im.material {
+        Some(m) => Some(material_index(m, src.key_line(at, "material"), &entry)?),
+        None => None,
+    };
+    let mut by_group = std::collections::HashMap::new();
+    for (g, m) in im.materials.iter().flatten() {
+        if !groups.contains(&g.as_str()) {
+            return Err(unknown_group("materials", g));
+        }
+        by_group.insert(
+            g.as_str(),
+            material_index(m, src.key_line(at, "materials"), &entry)?,
+        );
+    }
+    let fixed = im.fixed.clone().unwrap_or_default();
+    if let Some(g) = fixed.iter().find(|g| !groups.contains(&g.as_str())) {
+        return Err(unknown_group("fixed", g));
+    }
+    let kind = parse_kind(im.kind.as_deref())
+        .map_err(|e| err_at(src.key_line(at, "kind"), entry.clone(), e.0, e.1))?;
+    let mesh_size = match im.mesh_size {
+        None => None,
+        Some(h) => Some(check_value(src, at, &entry, "mesh_size", h, true, "m")?),
+    };
+    read.into_iter()
+        .map(|b| {
+            let material = match by_group.get(b.group.as_str()).copied().or(default) {
+                Some(m) => m,
+                None => {
+                    return Err(err_at(
+                        line,
+                        entry.clone(),
+                        format!("the blocks of group '{}' have no material", b.group),
+                        format!(
+                            "add material = \"<name>\" (every group) or materials = {{ {} = \"<name>\" }}",
+                            b.group
+                        ),
+                    ))
+                }
+            };
+            Ok(Block {
+                name: match &im.name {
+                    Some(p) => format!("{p}_{}", b.name),
+                    None => b.name,
+                },
+                material,
+                support: if fixed.contains(&b.group) {
+                    Support::Fixed
+                } else {
+                    Support::Free
+                },
+                vertices: b.vertices,
+                kind,
+                mesh_size,
+                prescribed: None,
+                line: Some(line),
+            })
+        })
+        .collect()
 }
 
 fn parse_kind(k: Option<&str>) -> std::result::Result<BlockKind, (String, String)> {

@@ -21,8 +21,9 @@
 //! converged step (updated Lagrangian); a step that does not converge is halved.
 //!
 //! Damping C: the Kelvin–Voigt viscosities of the blocks (D_v from λ*, μ*) and of the
-//! contacts (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h, acting like the secant springs: both
-//! when a contact sticks, cₙ only when it slips, none when it is open), plus the optional
+//! contacts (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h, both while a contact is closed, sticking
+//! or slipping: the band's dashpots act in parallel with its friction slider, so that the
+//! shear force is continuous at the onset of slip; none when it is open), plus the optional
 //! Rayleigh a₀ M + a₁ K_s.
 //!
 //! Energy audit (J, all in the ground's frame): kinetic ½ vᵀMv; elastic energy of the
@@ -729,7 +730,17 @@ impl<'a> Dynamics<'a> {
             }
             if let Some(cbuf) = self.cbuf.as_mut() {
                 let lc: Vec<LocalStiffness> = (0..self.visc.len())
-                    .map(|k| secant_local(self.visc[k], trial.state[k]))
+                    .map(|k| {
+                        // the dashpots act while the band is closed, slipping or not (in
+                        // parallel with the friction slider: a viscous shear that vanished
+                        // at the onset of slip would make the force jump by cₛ γ̇ there and
+                        // the iterations cycle between stick and slip)
+                        let state = match trial.state[k] {
+                            ContactState::Slip => ContactState::Stick,
+                            s => s,
+                        };
+                        secant_local(self.visc[k], state)
+                    })
                     .collect();
                 self.system.damping_into(&trial.mesh, &lc, cbuf);
                 let mut cv = vec![0.0; n];

@@ -209,11 +209,12 @@ pub fn cst_stiffness(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
 /// (u_m − u_l)·dir = g · [q_l, q_m]. 6 entries for a node-to-node contact.
 pub fn contact_gradient(ml: &PointMap, mm: &PointMap, dir: Point) -> [f64; 12] {
     let mut g = [0.0; 12];
-    for k in 0..ml.len {
-        g[k] = -(dir[0] * ml.g[0][k] + dir[1] * ml.g[1][k]);
+    let (gl, gm) = g.split_at_mut(ml.len);
+    for (k, x) in gl.iter_mut().enumerate() {
+        *x = -(dir[0] * ml.g[0][k] + dir[1] * ml.g[1][k]);
     }
-    for k in 0..mm.len {
-        g[ml.len + k] = dir[0] * mm.g[0][k] + dir[1] * mm.g[1][k];
+    for (k, x) in gm.iter_mut().take(mm.len).enumerate() {
+        *x = dir[0] * mm.g[0][k] + dir[1] * mm.g[1][k];
     }
     g
 }

@@ -176,7 +176,7 @@ pub fn evaluate(
         .with_min_len(256)
         .map(|k| {
             let c = &cur.contacts[k];
-            let rel = sub(du[c.node_m as usize], du[c.node_l as usize]);
+            let rel = sub(du[c.node_m as usize], c.at_l(|n| du[n as usize]));
             let n0 = c.normal;
             let d = [
                 n0[0] * rel[0] + n0[1] * rel[1],
@@ -208,11 +208,15 @@ pub fn evaluate(
         if fnn == 0.0 && fs == 0.0 {
             continue;
         }
-        let (ml, mm) = (mesh.node_map(c.node_l), mesh.node_map(c.node_m));
+        let (ml, mm) = mesh.contact_maps(c);
         let gn = contact_gradient(&ml, &mm, c.normal);
         let gs = contact_gradient(&ml, &mm, [-c.normal[1], c.normal[0]]);
-        for i in 0..6 {
-            let dof = if i < 3 { ml.dofs[i] } else { mm.dofs[i - 3] };
+        for i in 0..ml.len + mm.len {
+            let dof = if i < ml.len {
+                ml.dofs[i]
+            } else {
+                mm.dofs[i - ml.len]
+            };
             if dof != CONSTRAINED {
                 f_int[dof as usize] += fnn * gn[i] + fs * gs[i];
             }

@@ -21,8 +21,9 @@
 //! converged step (updated Lagrangian); a step that does not converge is halved.
 //!
 //! Damping C: the Kelvin–Voigt viscosities of the blocks (D_v from λ*, μ*) and of the
-//! contacts (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h, acting like the secant springs: both
-//! when a contact sticks, cₙ only when it slips, none when it is open), plus the optional
+//! contacts (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h, both while a contact is closed, sticking
+//! or slipping: the band's dashpots act in parallel with its friction slider, so that the
+//! shear force is continuous at the onset of slip; none when it is open), plus the optional
 //! Rayleigh a₀ M + a₁ K_s.
 //!
 //! Energy audit (J, all in the ground's frame): kinetic ½ vᵀMv; elastic energy of the
@@ -40,6 +41,7 @@
 //! [`Dynamics::retopologize`] — the seam left for large motions with new contacts.
 
 use super::config::{evaluate, secant_local, Committed, Trial};
+use super::contact_search;
 use super::{fit_motion, Outcome, Stats, Status};
 use crate::assembly::{loads, mass, LocalStiffness, System};
 use crate::geometry::polygon::Point;
@@ -61,6 +63,7 @@ pub const KEYS: &[&str] = &[
     "max_iterations",
     "max_cuts",
     "initial",
+    "impact_reset",
 ];
 
 /// Open/closed changes of a contact within a step after which its normal spring stays
@@ -124,6 +127,9 @@ pub struct Settings {
     /// Start from the elastic equilibrium of gravity (`initial = "static"`, default) or
     /// from zero contact forces with gravity applied at t = 0 (`initial = "rest"`).
     pub preload: bool,
+    /// Recompute the acceleration after a step in which a contact opened or closed
+    /// ([`Dynamics::filtered_acceleration`]); `impact_reset = false` turns it off.
+    pub reset_on_impact: bool,
 }
 
 impl Settings {
@@ -177,6 +183,14 @@ impl Settings {
             tolerance: num("tolerance", 1e-6, 1e-14, 0.1)?,
             max_iterations: num("max_iterations", 100.0, 1.0, 1e6)? as usize,
             max_cuts: num("max_cuts", 6.0, 0.0, 30.0)? as usize,
+            reset_on_impact: match x.get("impact_reset") {
+                None => true,
+                Some(v) => v.as_bool().ok_or_else(|| {
+                    Error::new("'impact_reset' must be true or false")
+                        .place(place("impact_reset"))
+                        .fix("impact_reset = true (default) or false")
+                })?,
+            },
             preload: match x.get("initial").map(|v| v.as_str()) {
                 None | Some(Some("static")) => true,
                 Some(Some("rest")) => false,
@@ -300,6 +314,30 @@ fn invert3(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
     })
 }
 
+/// Per contact: area A_c = length × thickness (m²), springs (kₙ, kₛ) (N/m) and
+/// viscosities (cₙ, cₛ) = (Eₙ*, Gₛ*) A_c / h (N·s/m), METHOD.md §3.
+fn contact_coefficients(
+    scene: &Scene,
+    law: &MohrCoulomb,
+    contacts: &[crate::mesh::Contact],
+) -> (Vec<f64>, Vec<ContactSprings>, Vec<ContactSprings>) {
+    let joint = scene.joints.get(scene.contacts.joint);
+    let t = scene.model.thickness;
+    let area: Vec<f64> = contacts.iter().map(|c| c.length * t).collect();
+    let springs = area.iter().map(|&a| law.springs(a)).collect();
+    let visc = area
+        .iter()
+        .map(|&a| match joint {
+            Some(j) => ContactSprings {
+                kn: j.normal_viscosity * a / j.band,
+                ks: j.shear_viscosity * a / j.band,
+            },
+            None => ContactSprings { kn: 0.0, ks: 0.0 },
+        })
+        .collect();
+    (area, springs, visc)
+}
+
 /// A converged step, ready to commit.
 struct Accepted {
     trial: Trial,
@@ -329,19 +367,7 @@ impl<'a> Dynamics<'a> {
             cohesion: 0.0,
             tensile_strength: 0.0,
         });
-        let t = scene.model.thickness;
-        let area: Vec<f64> = mesh.contacts.iter().map(|c| c.length * t).collect();
-        let springs = area.iter().map(|&a| law.springs(a)).collect();
-        let visc = area
-            .iter()
-            .map(|&a| match joint {
-                Some(j) => ContactSprings {
-                    kn: j.normal_viscosity * a / j.band,
-                    ks: j.shear_viscosity * a / j.band,
-                },
-                None => ContactSprings { kn: 0.0, ks: 0.0 },
-            })
-            .collect::<Vec<_>>();
+        let (area, springs, visc) = contact_coefficients(scene, &law, &mesh.contacts);
         let mass = mass::lumped(scene, mesh);
         let iota = mass::influence(mesh);
         let g = scene.model.gravity;
@@ -355,7 +381,9 @@ impl<'a> Dynamics<'a> {
             let m = &scene.materials[scene.blocks[b as usize].material];
             m.viscous_lambda > 0.0 || m.viscous_mu > 0.0
         });
-        let viscous_contacts = visc.iter().any(|c| c.kn > 0.0 || c.ks > 0.0);
+        // from the joint, not the contacts: a run may start with none and find some
+        let viscous_contacts =
+            joint.is_some_and(|j| j.normal_viscosity > 0.0 || j.shear_viscosity > 0.0);
         let pattern = system.plan.pattern().clone();
         let cbuf = (viscous_blocks || viscous_contacts).then(|| CsrMatrix::zeros(pattern.clone()));
         let compliance = mesh
@@ -395,6 +423,7 @@ impl<'a> Dynamics<'a> {
             stats: Stats {
                 dofs: n,
                 contacts: mesh.contacts.len(),
+                contact_topologies: 1,
                 triangles: mesh.triangles.len(),
                 ..Default::default()
             },
@@ -405,32 +434,43 @@ impl<'a> Dynamics<'a> {
             d.preload()?;
         }
         let f0 = d.f_ext(0.0);
-        let r0: Vec<f64> = (0..n).map(|i| f0[i] - d.f_int[i]).collect();
-        d.a = (0..n).map(|i| r0[i] / d.mass[i]).collect();
+        d.a = (0..n).map(|i| (f0[i] - d.f_int[i]) / d.mass[i]).collect();
         if d.settings.preload {
-            // the initial acceleration seen by the first step: (M + β h² K_s) a₀ = r₀.
-            // The soft motions (a sliding block) get M⁻¹ r₀; the stiff ones (a contact
-            // pressed by the out-of-balance left by the return to the strength) get ≈ 0,
-            // as the contacts adjust within the first step
-            let h = d.settings.dt;
-            let beta = d.settings.scheme.beta;
-            let local: Vec<LocalStiffness> = (0..d.springs.len())
-                .map(|k| secant_local(d.springs[k], d.committed.state[k]))
-                .collect();
-            d.system.stiffness_into(&d.cur, &local, &mut d.kbuf);
-            d.kbuf.values.iter_mut().for_each(|k| *k *= beta * h * h);
-            for (i, &p) in d.diag.iter().enumerate() {
-                d.kbuf.values[p] += d.mass[i];
-            }
-            let mut x = r0;
-            if d.backend.factorize(&d.kbuf).is_ok()
-                && d.backend.solve(&mut x).is_ok()
-                && x.iter().all(|v| v.is_finite())
-            {
-                d.a = x;
-            }
+            d.filtered_acceleration();
         }
         Ok(d)
+    }
+
+    /// The acceleration of the committed state seen by the next step:
+    /// (M + β h² K_s) a = F(t) − F_int − C v. The soft motions (a sliding block) get
+    /// M⁻¹ r; the stiff ones (a contact pressed by an out-of-balance force) get ≈ 0, as the
+    /// contacts adjust within the step. Used at the start, and after a step in which a
+    /// contact opened or closed: the acceleration of an impact is an impulse spread over
+    /// one step, which the next steps would otherwise carry on (through the a₀ terms of
+    /// the update) after the contact has let go, feeding energy into the free motion.
+    fn filtered_acceleration(&mut self) {
+        let f = self.f_ext(self.time);
+        let r: Vec<f64> = (0..f.len())
+            .map(|i| f[i] - self.f_int[i] - self.f_visc[i])
+            .collect();
+        let h = self.settings.dt;
+        let beta = self.settings.scheme.beta;
+        let local: Vec<LocalStiffness> = (0..self.springs.len())
+            .map(|k| secant_local(self.springs[k], self.committed.state[k]))
+            .collect();
+        self.system
+            .stiffness_into(&self.cur, &local, &mut self.kbuf);
+        self.kbuf.values.iter_mut().for_each(|k| *k *= beta * h * h);
+        for (i, &p) in self.diag.iter().enumerate() {
+            self.kbuf.values[p] += self.mass[i];
+        }
+        let mut x = r;
+        if self.backend.factorize(&self.kbuf).is_ok()
+            && self.backend.solve(&mut x).is_ok()
+            && x.iter().all(|v| v.is_finite())
+        {
+            self.a = x;
+        }
     }
 
     /// The initial state: the elastic equilibrium K₀ u₀ = F_static of gravity and loads
@@ -482,23 +522,82 @@ impl<'a> Dynamics<'a> {
         Ok(())
     }
 
-    /// The seam for contact re-detection (large motions): after new contacts are found
-    /// in the current configuration, the system (pattern, scatter maps), the contact
-    /// springs and areas, and the buffers are rebuilt here, and the committed contact
-    /// forces and states mapped by contact identity. Not called yet: the contacts of the
-    /// initial geometry are kept for the whole run.
-    #[allow(dead_code)]
-    fn retopologize(&mut self) {
+    /// Look for new contacts and drop far-separated ones in the current configuration
+    /// ([`contact_search`]); rebuild the system (pattern, and with it the symbolic
+    /// factorization at the next solve) only when the set changed. The committed forces
+    /// and states of the contacts kept are carried over; a new contact starts with the
+    /// band's force at its gap, Fₙ = kₙ × gap: open with its opening remembered (as in
+    /// [`Dynamics::commit`]) when the gap is positive, compressed otherwise.
+    /// Returns whether the contact set changed.
+    fn update_contacts(&mut self) -> bool {
+        let band = self.law.elastic.band;
         let t = self.scene.model.thickness;
+        let vel: Vec<Point> = (0..self.cur.nodes.len() as u32)
+            .map(|n| self.cur.node_displacement(n, &self.v))
+            .collect();
+        let vmax = vel.iter().fold(0.0f64, |m, v| m.max(v[0].hypot(v[1])));
+        let reach = band + 2.0 * vmax * self.settings.dt;
+        let keep = contact_search::kept(&self.cur, &self.committed.state, band, reach);
+        let dropped = keep.iter().filter(|k| !**k).count();
+        if dropped > 0 {
+            let mut it = keep.iter();
+            self.cur.contacts.retain(|_| *it.next().unwrap());
+            let mut it = keep.iter();
+            self.committed.force.retain(|_| *it.next().unwrap());
+            let mut it = keep.iter();
+            self.committed.state.retain(|_| *it.next().unwrap());
+        }
+        let found = contact_search::search(&self.cur, &vel, band, reach);
+        let added = found.len();
+        for f in found {
+            // the band's force at the gap: the remembered opening of an open contact, or
+            // the elastic compression of one found already within the band
+            let kn = self.law.springs(f.contact.length * t).kn;
+            self.committed.force.push([kn * f.gap, 0.0]);
+            self.committed.state.push(if f.gap > 0.0 {
+                ContactState::Open
+            } else {
+                ContactState::Stick
+            });
+            self.cur.contacts.push(f.contact);
+        }
+        // the tributary lengths of vertex-to-edge contacts follow the geometry (a corner
+        // that lands and turns onto its side gets half of that side)
+        let lengths: Vec<f64> = self
+            .cur
+            .contacts
+            .iter()
+            .map(|c| match c.along {
+                Some(_) => contact_search::current_length(&self.cur, c, band, reach),
+                None => c.length,
+            })
+            .collect();
+        for (k, (c, l)) in self.cur.contacts.iter_mut().zip(lengths).enumerate() {
+            // an open contact keeps its gap (Fₙ/kₙ) when its spring changes with the length
+            if l != c.length && self.committed.state[k] == ContactState::Open {
+                self.committed.force[k][0] *= l / c.length;
+            }
+            c.length = l;
+        }
+        let (area, springs, visc) = contact_coefficients(self.scene, &self.law, &self.cur.contacts);
+        self.area = area;
+        self.springs = springs;
+        self.visc = visc;
+        if dropped + added == 0 {
+            return false;
+        }
         self.system = System::for_dynamics(self.scene, &self.cur);
-        self.area = self.cur.contacts.iter().map(|c| c.length * t).collect();
-        self.springs = self.area.iter().map(|&a| self.law.springs(a)).collect();
+        // the internal force of the committed state with the new contact set
+        let now = self.trial(&vec![0.0; self.cur.n_dofs]);
+        self.f_int = now.f_int;
         let pattern = self.system.plan.pattern().clone();
         self.diag = pattern.diagonal_positions();
         self.kbuf = CsrMatrix::zeros(pattern.clone());
         if self.cbuf.is_some() {
             self.cbuf = Some(CsrMatrix::zeros(pattern));
         }
+        self.stats.contact_topologies += 1;
+        true
     }
 
     /// The ground acceleration vector (m/s²) at time t.
@@ -559,6 +658,7 @@ impl<'a> Dynamics<'a> {
         let mut prev_state = trial.state.clone();
         let mut prev_force = trial.force.clone();
         let mut flips = vec![0u32; trial.state.len()];
+        let mut slip_flips = vec![0u32; trial.state.len()];
         let mut weight = vec![1.0f64; trial.state.len()];
         let size = {
             let b = crate::geometry::polygon::bbox(&self.cur.nodes);
@@ -584,6 +684,13 @@ impl<'a> Dynamics<'a> {
                 if it > 0 && open != (prev_state[k] == ContactState::Open) {
                     flips[k] += 1;
                 }
+                let pair = [trial.state[k], prev_state[k]];
+                if it > 0
+                    && pair.contains(&ContactState::Stick)
+                    && pair.contains(&ContactState::Slip)
+                {
+                    slip_flips[k] += 1;
+                }
                 if flips[k] >= FLIPS_BEFORE_ELASTIC {
                     weight[k] = if open {
                         weight[k] * OPEN_WEIGHT_DECAY
@@ -605,6 +712,9 @@ impl<'a> Dynamics<'a> {
                     if flips[k] >= FLIPS_BEFORE_ELASTIC {
                         l[0][0] = weight[k] * self.springs[k].kn;
                     }
+                    if slip_flips[k] >= FLIPS_BEFORE_ELASTIC && states[k] != ContactState::Open {
+                        l[1][1] = self.springs[k].ks;
+                    }
                     l
                 })
                 .collect();
@@ -620,7 +730,17 @@ impl<'a> Dynamics<'a> {
             }
             if let Some(cbuf) = self.cbuf.as_mut() {
                 let lc: Vec<LocalStiffness> = (0..self.visc.len())
-                    .map(|k| secant_local(self.visc[k], trial.state[k]))
+                    .map(|k| {
+                        // the dashpots act while the band is closed, slipping or not (in
+                        // parallel with the friction slider: a viscous shear that vanished
+                        // at the onset of slip would make the force jump by cₛ γ̇ there and
+                        // the iterations cycle between stick and slip)
+                        let state = match trial.state[k] {
+                            ContactState::Slip => ContactState::Stick,
+                            s => s,
+                        };
+                        secant_local(self.visc[k], state)
+                    })
                     .collect();
                 self.system.damping_into(&trial.mesh, &lc, cbuf);
                 let mut cv = vec![0.0; n];
@@ -658,6 +778,21 @@ impl<'a> Dynamics<'a> {
                 });
             if std::env::var_os("DFEM_TRACE").is_some() {
                 eprintln!("t {t0:.4} h {h:.3e} it {it} residual {:.3e}", rn / scale);
+                for k in 0..trial.state.len() {
+                    if trial.state[k] != prev_state[k] {
+                        let c = &trial.mesh.contacts[k];
+                        eprintln!(
+                            "  contact {k} ({}-{}) {:?} -> {:?} force {:?} flips {} w {}",
+                            c.block_l,
+                            c.block_m,
+                            prev_state[k],
+                            trial.state[k],
+                            trial.force[k],
+                            flips[k],
+                            weight[k]
+                        );
+                    }
+                }
             }
             if it > 0 && rn <= self.settings.tolerance * scale && !changed {
                 return Ok(Some(Accepted {
@@ -799,7 +934,21 @@ impl<'a> Dynamics<'a> {
             h = h.min(target - self.time);
             match self.step(h)? {
                 Some(acc) => {
+                    let before: Vec<bool> = self
+                        .committed
+                        .state
+                        .iter()
+                        .map(|s| *s == ContactState::Open)
+                        .collect();
                     self.commit(acc);
+                    let switched = before
+                        .iter()
+                        .zip(&self.committed.state)
+                        .any(|(o, s)| *o != (*s == ContactState::Open));
+                    let changed = self.update_contacts();
+                    if self.settings.reset_on_impact && (switched || changed) {
+                        self.filtered_acceleration();
+                    }
                     h *= 2.0;
                 }
                 None => {
@@ -913,6 +1062,7 @@ pub fn run(
 ) -> Result<Outcome> {
     let start = Instant::now();
     let mut d = Dynamics::new(scene, mesh, backend)?;
+    d.update_contacts();
     let blocks = tracked(scene, mesh);
     let mut columns = vec!["t".to_string()];
     for &b in &blocks {

@@ -208,7 +208,7 @@ pub fn classify(
                     closed += 1;
                     // a slip state counts only where the mode really slides
                     let v = mesh.node_displacement(c.node_m, dq);
-                    let w = mesh.node_displacement(c.node_l, dq);
+                    let w = c.at_l(|n| mesh.node_displacement(n, dq));
                     let rel = [v[0] - w[0], v[1] - w[1]];
                     let tang = (-rel[0] * c.normal[1] + rel[1] * c.normal[0]).abs();
                     if tang > 0.05 * size {

@@ -2,6 +2,7 @@
 //! ([`dynamics`]).
 
 pub mod config;
+pub mod contact_search;
 pub mod curve;
 pub mod dynamics;
 pub mod mechanism;
@@ -37,6 +38,9 @@ pub struct Stats {
     pub iterations: usize,
     pub factorizations: usize,
     pub symbolic_factorizations: usize,
+    /// Distinct contact sets a dynamic run went through (1 + the changes made by the
+    /// search for new contacts, [`contact_search`]); each needs one symbolic analysis.
+    pub contact_topologies: usize,
     /// Secant corrections solved with an earlier factorization as preconditioner instead
     /// of a refactorization (few contacts changed state).
     pub reused_factorizations: usize,

@@ -8,7 +8,7 @@ pub mod loads;
 pub mod mass;
 
 use crate::material::{block_elastic, ContactSprings};
-use crate::mesh::{Mesh, NodeMap};
+use crate::mesh::{Mesh, PointMap};
 
 use crate::geometry::polygon::Point;
 use crate::scene::Scene;
@@ -63,11 +63,11 @@ impl System {
             conn.push(&dofs);
         }
         for c in &mesh.contacts {
-            let (ml, mm) = (mesh.node_map(c.node_l), mesh.node_map(c.node_m));
-            let mut dofs = [CONSTRAINED; 6];
-            dofs[..3].copy_from_slice(&ml.dofs);
-            dofs[3..].copy_from_slice(&mm.dofs);
-            conn.push(&dofs);
+            let (ml, mm) = mesh.contact_maps(c);
+            let mut dofs = [CONSTRAINED; 12];
+            dofs[..ml.len].copy_from_slice(&ml.dofs[..ml.len]);
+            dofs[ml.len..ml.len + mm.len].copy_from_slice(&mm.dofs[..mm.len]);
+            conn.push(&dofs[..ml.len + mm.len]);
         }
         if rigid_diagonal {
             for b in &mesh.blocks {
@@ -149,7 +149,7 @@ impl System {
             } else if e < nt + nc {
                 let c = e - nt;
                 let con = &mesh.contacts[c];
-                let (ml, mm) = (mesh.node_map(con.node_l), mesh.node_map(con.node_m));
+                let (ml, mm) = mesh.contact_maps(con);
                 contact_stiffness(&ml, &mm, con.normal, &local[c], ke);
             } else {
                 // the rigid blocks' diagonal elements (dynamics) carry no stiffness
@@ -204,13 +204,17 @@ pub fn cst_stiffness(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
     }
 }
 
-/// Gradient (6 entries) of a relative displacement component along `dir` with respect
-/// to the contact's unknowns: (u_m − u_l)·dir = g · [q_l, q_m].
-pub fn contact_gradient(ml: &NodeMap, mm: &NodeMap, dir: Point) -> [f64; 6] {
-    let mut g = [0.0; 6];
-    for k in 0..3 {
-        g[k] = -(dir[0] * ml.g[0][k] + dir[1] * ml.g[1][k]);
-        g[3 + k] = dir[0] * mm.g[0][k] + dir[1] * mm.g[1][k];
+/// Gradient of a relative displacement component along `dir` with respect to the
+/// contact's unknowns (the l point's `ml.len` slots, then the m point's):
+/// (u_m − u_l)·dir = g · [q_l, q_m]. 6 entries for a node-to-node contact.
+pub fn contact_gradient(ml: &PointMap, mm: &PointMap, dir: Point) -> [f64; 12] {
+    let mut g = [0.0; 12];
+    let (gl, gm) = g.split_at_mut(ml.len);
+    for (k, x) in gl.iter_mut().enumerate() {
+        *x = -(dir[0] * ml.g[0][k] + dir[1] * ml.g[1][k]);
+    }
+    for (k, x) in gm.iter_mut().take(mm.len).enumerate() {
+        *x = dir[0] * mm.g[0][k] + dir[1] * mm.g[1][k];
     }
     g
 }
@@ -218,20 +222,28 @@ pub fn contact_gradient(ml: &NodeMap, mm: &NodeMap, dir: Point) -> [f64; 6] {
 /// Contact stiffness (N/m) K = Tᵀ K′ T mapped to the unknowns: Σ_ab g_a k_ab g_bᵀ over
 /// a, b ∈ {n, s}, with gₙ, gₛ the gradients of δₙ = n·(u_m − u_l) and
 /// δₛ = s·(u_m − u_l), s = (−n_y, n_x). For elastic springs, kₙ gₙ gₙᵀ + kₛ gₛ gₛᵀ.
-pub fn contact_stiffness(ml: &NodeMap, mm: &NodeMap, n: Point, k: &LocalStiffness, ke: &mut [f64]) {
+/// `ke` is row-major, (ml.len + mm.len)².
+pub fn contact_stiffness(
+    ml: &PointMap,
+    mm: &PointMap,
+    n: Point,
+    k: &LocalStiffness,
+    ke: &mut [f64],
+) {
     let g = [
         contact_gradient(ml, mm, n),
         contact_gradient(ml, mm, [-n[1], n[0]]),
     ];
-    for i in 0..6 {
-        for j in 0..6 {
+    let len = ml.len + mm.len;
+    for i in 0..len {
+        for j in 0..len {
             let mut v = 0.0;
             for a in 0..2 {
                 for b in 0..2 {
                     v += g[a][i] * k[a][b] * g[b][j];
                 }
             }
-            ke[6 * i + j] = v;
+            ke[len * i + j] = v;
         }
     }
 }

@@ -56,8 +56,37 @@ pub struct Contact {
     pub edge_l: [u32; 2],
     /// Tributary length along the joint (m); the contact area is `length × thickness`.
     pub length: f64,
-    /// Index of the joint segment it belongs to.
+    /// Index of the joint segment it belongs to (`u32::MAX` for a contact found during a
+    /// dynamic run).
     pub segment: u32,
+    /// A vertex-to-edge contact found during a large motion (METHOD.md §6): the l side is
+    /// the point at this fraction (0 to 1) along `edge_l` (two consecutive boundary nodes
+    /// of block l), not a node; `node_l` is then the nearer end of that edge.
+    pub along: Option<f64>,
+}
+
+impl Contact {
+    /// The nodes and weights whose combination is the contact's point on block l:
+    /// `node_l` alone, or the two ends of `edge_l` for a vertex-to-edge contact.
+    pub fn l_points(&self) -> [(u32, f64); 2] {
+        match self.along {
+            None => [(self.node_l, 1.0), (self.node_l, 0.0)],
+            Some(w) => [(self.edge_l[0], 1.0 - w), (self.edge_l[1], w)],
+        }
+    }
+
+    /// The contact's point on block l from per-node values (positions, displacements).
+    pub fn at_l(&self, value: impl Fn(u32) -> Point) -> Point {
+        let mut p = [0.0; 2];
+        for (n, w) in self.l_points() {
+            if w != 0.0 {
+                let v = value(n);
+                p[0] += w * v[0];
+                p[1] += w * v[1];
+            }
+        }
+        p
+    }
 }
 
 /// The mesh of a scene.
@@ -87,7 +116,55 @@ pub struct NodeMap {
     pub g: [[f64; 3]; 2],
 }
 
+/// The unknowns a contact point depends on: a node's [`NodeMap`] (3 slots), or the
+/// combination (1 − w) G_a + w G_b of an edge's two ends (3 slots when both ends follow
+/// the same rigid block, 6 otherwise). `u_point = g · u[dofs[..len]]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointMap {
+    pub dofs: [u32; 6],
+    pub g: [[f64; 6]; 2],
+    pub len: usize,
+}
+
+impl PointMap {
+    fn weighted(parts: &[(NodeMap, f64)]) -> PointMap {
+        let mut m = PointMap {
+            dofs: [CONSTRAINED; 6],
+            g: [[0.0; 6]; 2],
+            len: 0,
+        };
+        for (nm, w) in parts {
+            // the same unknowns as the part before (a rigid block): add into its slots
+            let base = if m.len >= 3 && m.dofs[m.len - 3..m.len] == nm.dofs {
+                m.len - 3
+            } else {
+                m.len += 3;
+                m.len - 3
+            };
+            for k in 0..3 {
+                m.dofs[base + k] = nm.dofs[k];
+                for i in 0..2 {
+                    m.g[i][base + k] += w * nm.g[i][k];
+                }
+            }
+        }
+        m
+    }
+}
+
 impl Mesh {
+    /// The maps of a contact's two points (l side, m side).
+    pub fn contact_maps(&self, c: &Contact) -> (PointMap, PointMap) {
+        let l = match c.along {
+            None => PointMap::weighted(&[(self.node_map(c.node_l), 1.0)]),
+            Some(_) => {
+                let [(a, wa), (b, wb)] = c.l_points();
+                PointMap::weighted(&[(self.node_map(a), wa), (self.node_map(b), wb)])
+            }
+        };
+        (l, PointMap::weighted(&[(self.node_map(c.node_m), 1.0)]))
+    }
+
     pub fn node_map(&self, node: u32) -> NodeMap {
         let b = &self.blocks[self.node_block[node as usize] as usize];
         match b.dofs {
@@ -353,6 +430,7 @@ pub fn build(scene: &Scene) -> Mesh {
                 edge_l,
                 length: hi - lo,
                 segment: si as u32,
+                along: None,
             });
         }
     }

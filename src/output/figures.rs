@@ -141,15 +141,18 @@ impl Deformed {
             .iter()
             .map(|&b| mesh.blocks[b as usize].dofs == BlockDofs::Fixed)
             .collect();
-        let contacts = mesh
-            .contacts
+        // the contacts of the current configuration (a dynamic run adds and drops some)
+        let contacts = out
+            .current
+            .as_ref()
+            .map_or(&mesh.contacts, |m| &m.contacts)
             .iter()
             .zip(&out.contact_states)
             .map(|(c, s)| {
-                let (l, m) = (c.node_l as usize, c.node_m as usize);
+                let m = c.node_m as usize;
                 ContactMark {
-                    at: [mesh.nodes[l], mesh.nodes[m]],
-                    disp: [out.node_disp[l], out.node_disp[m]],
+                    at: [c.at_l(|n| mesh.nodes[n as usize]), mesh.nodes[m]],
+                    disp: [c.at_l(|n| out.node_disp[n as usize]), out.node_disp[m]],
                     state: s.code() as u8,
                 }
             })

@@ -86,6 +86,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "iterations": s.iterations,
             "factorizations": s.factorizations,
             "symbolic_factorizations": s.symbolic_factorizations,
+            "contact_topologies": s.contact_topologies,
             "reused_factorizations": s.reused_factorizations,
             "reuse_iterations": s.reuse_iterations,
             "min_pivot_ratio": s.min_pivot_ratio,

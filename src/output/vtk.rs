@@ -124,14 +124,16 @@ pub fn write_step(
     s.push_str(TAIL);
     write_atomic(&dir.join(format!("blocks_{step:04}.vtu")), s.as_bytes())?;
 
-    // contacts: a line cell from node l to node m (coincident at the start)
-    let mut pts = Vec::with_capacity(2 * mesh.contacts.len());
-    let mut cdisp = Vec::with_capacity(2 * mesh.contacts.len());
-    let mut ccells = Vec::with_capacity(mesh.contacts.len());
-    for (k, c) in mesh.contacts.iter().enumerate() {
-        pts.push(mesh.nodes[c.node_l as usize]);
+    // contacts: a line cell from point l to node m (coincident at the start), those of
+    // the current configuration (a dynamic run adds and drops contacts)
+    let contacts = out.current.as_ref().map_or(&mesh.contacts, |m| &m.contacts);
+    let mut pts = Vec::with_capacity(2 * contacts.len());
+    let mut cdisp = Vec::with_capacity(2 * contacts.len());
+    let mut ccells = Vec::with_capacity(contacts.len());
+    for (k, c) in contacts.iter().enumerate() {
+        pts.push(c.at_l(|n| mesh.nodes[n as usize]));
         pts.push(mesh.nodes[c.node_m as usize]);
-        cdisp.push(disp[c.node_l as usize]);
+        cdisp.push(c.at_l(|n| disp[n as usize]));
         cdisp.push(disp[c.node_m as usize]);
         ccells.push(vec![2 * k as u32, 2 * k as u32 + 1]);
     }
@@ -161,7 +163,7 @@ pub fn write_step(
         &mut s,
         "normal",
         3,
-        mesh.contacts
+        contacts
             .iter()
             .flat_map(|c| [c.normal[0], c.normal[1], 0.0]),
     );
@@ -169,9 +171,7 @@ pub fn write_step(
         &mut s,
         "area_m2",
         1,
-        mesh.contacts
-            .iter()
-            .map(|c| c.length * scene.model.thickness),
+        contacts.iter().map(|c| c.length * scene.model.thickness),
     );
     int_array(
         &mut s,

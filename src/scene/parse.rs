@@ -139,6 +139,7 @@ const ANALYSIS_KEYS: &[&str] = &[
     "rho_inf",
     "rayleigh",
     "initial",
+    "impact_reset",
 ];
 
 /// Read and validate a scene file.

@@ -118,3 +118,11 @@ fn rigid_cantilever_matches_spring_chain() {
     eprintln!("rigid chain tip {delta:.9e} m, closed form {exact:.9e} m");
     assert!(err < 1e-9, "error {err}");
 }
+
+/// MUMPS and PETSc (cargo features) give faer's displacements on both cantilevers.
+#[cfg(any(feature = "mumps", feature = "petsc"))]
+#[test]
+fn ffi_backends_match_faer_on_the_cantilevers() {
+    common::assert_ffi_backends_match_faer(&common::scene(&scene("deformable", Some(0.05))));
+    common::assert_ffi_backends_match_faer(&common::scene(&scene("rigid", None)));
+}

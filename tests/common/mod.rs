@@ -54,3 +54,46 @@ friction_angle = {phi}
 "#
     )
 }
+
+/// Solve a scene with the backend `name` (its near-null space set to the blocks' rigid-body
+/// modes, as `dfem run` does).
+pub fn solve_with(sc: &Scene, name: &str) -> (Mesh, Outcome) {
+    let m = mesh::build(sc);
+    let mut backend = dfem::solve::backend(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+    backend
+        .set_near_null_space(&dfem::solve::rigid_body_modes(&m))
+        .unwrap();
+    let out = analysis::run(sc, &m, backend.as_mut()).unwrap_or_else(|e| panic!("{name}: {e}"));
+    (m, out)
+}
+
+/// Every backend of dfem-ffi compiled in (MUMPS, PETSc) gives the unknowns of faer's
+/// Cholesky to `1e-8` relative (max norm over the max of faer's), with the same status.
+/// 1e-8: the direct solvers differ by round-off times the condition number (the stiff
+/// joints of the validation scenes make it ~1e6–1e8 in the worst case), PETSc's CG stops at
+/// a relative residual of 1e-12 (its default here); the out-of-balance tolerance of the
+/// secant iterations (1e-8 and below) bounds what can differ after them.
+pub fn assert_ffi_backends_match_faer(sc: &Scene) {
+    let (_, reference) = solve(sc);
+    let umax = reference.u.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    assert!(umax > 0.0);
+    for name in dfem_ffi::BACKENDS {
+        let (_, out) = solve_with(sc, name);
+        assert_eq!(out.status, reference.status, "{name}");
+        let err = out
+            .u
+            .iter()
+            .zip(&reference.u)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{name}: max |u - u_faer| / max |u_faer| = {:.2e}",
+            err / umax
+        );
+        assert!(
+            err <= 1e-8 * umax,
+            "{name}: relative difference {:e}",
+            err / umax
+        );
+    }
+}

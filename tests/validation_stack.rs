@@ -110,6 +110,6 @@ fn rigid_stack_settles_as_joint_springs() {
 #[cfg(any(feature = "mumps", feature = "petsc"))]
 #[test]
 fn ffi_backends_match_faer_on_the_stacks() {
-    common::assert_ffi_backends_match_faer(&common::scene(&scene("deformable")));
-    common::assert_ffi_backends_match_faer(&common::scene(&scene("rigid")));
+    common::assert_ffi_backends_match_faer(&common::scene(&scene("deformable")), "");
+    common::assert_ffi_backends_match_faer(&common::scene(&scene("rigid")), "");
 }

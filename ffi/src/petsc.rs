@@ -248,6 +248,14 @@ impl LocalRows {
     }
 }
 
+/// Whether the unknowns come in node pairs (2k, 2k + 1) with identical rows in the pattern
+/// (the x and y components of one node of a deformable block), so that the matrix can be
+/// given block size 2. Rigid blocks (3 unknowns) or constrained components break it.
+fn node_pairs(pattern: &CsrPattern) -> bool {
+    let n = pattern.n();
+    n % 2 == 0 && (0..n / 2).all(|k| pattern.row_cols(2 * k) == pattern.row_cols(2 * k + 1))
+}
+
 /// The PETSc backend; see the module documentation.
 pub struct Petsc {
     options: String,
@@ -374,6 +382,10 @@ impl Petsc {
         call!(MatCreate(c, &mut self.mat))?;
         call!(MatSetSizes(self.mat, nloc, nloc, n, n))?;
         call!(MatSetType(self.mat, c"aij".as_ptr()))?;
+        if node_pairs(pattern) {
+            // 2 unknowns per node: GAMG aggregates whole nodes (block size 2)
+            call!(MatSetBlockSize(self.mat, 2))?;
+        }
         // the CSR preallocation of the type that applies; the other call is a no-op
         call!(MatSeqAIJSetPreallocationCSR(
             self.mat,

@@ -105,3 +105,11 @@ fn rigid_stack_settles_as_joint_springs() {
     // rigid blocks: only the joints deform, exactly
     check("rigid", 1e-9);
 }
+
+/// MUMPS and PETSc (cargo features) give faer's displacements on both stacks.
+#[cfg(any(feature = "mumps", feature = "petsc"))]
+#[test]
+fn ffi_backends_match_faer_on_the_stacks() {
+    common::assert_ffi_backends_match_faer(&common::scene(&scene("deformable")), "");
+    common::assert_ffi_backends_match_faer(&common::scene(&scene("rigid")), "");
+}

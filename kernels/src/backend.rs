@@ -69,10 +69,16 @@ pub struct SolverStats {
     pub solve_seconds: f64,
     /// Stored entries of the factor (L for Cholesky, L + U for LU) of the last analysis.
     pub factor_nnz: usize,
-    /// smallest pivot ratio d_i / a_ii seen at the last factorization (a measure of near-singularity: ~1e-16 for a mechanism)
+    /// smallest pivot ratio d_i / a_ii seen at the last factorization (a measure of near-singularity: ~1e-16 for a mechanism).
+    /// NaN when the backend does not measure it (iterative solvers; MUMPS, which reports 0
+    /// when its null-pivot detection fires and NaN otherwise): callers treat NaN as "no
+    /// singularity detected" and rely on the factorization or solve failing instead.
     pub min_pivot_ratio: f64,
     /// Unknown (original numbering) where `min_pivot_ratio` was reached.
     pub min_pivot_index: usize,
+    /// Memory held by the factor or preconditioner of the last factorization, bytes, as
+    /// reported by the backend; 0 when it does not report it (then see `factor_nnz`).
+    pub memory_bytes: usize,
 }
 
 /// A sparse linear solver: symbolic analysis once per pattern, numeric factorization
@@ -90,6 +96,19 @@ pub trait LinearBackend: Send {
     fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError>;
     /// Counters and timers.
     fn stats(&self) -> &SolverStats;
+    /// Near-null space of the matrices to come: for elasticity of blocky structures, the
+    /// rigid-body modes (METHOD.md §2: two translations and the rotation about each
+    /// block's centroid, restricted to that block's unknowns), as dense vectors of length n.
+    /// Algebraic multigrid builds its coarse spaces from them (PETSc GAMG); direct solvers
+    /// and the built-in PCG ignore them (the default). Call before `factorize`.
+    fn set_near_null_space(&mut self, _modes: &[Vec<f64>]) -> Result<(), SolveError> {
+        Ok(())
+    }
+}
+
+/// Whether two value arrays are bit-identical (the skip test of `factorize`).
+pub fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
 /// Names accepted by [`backend_from_name`].

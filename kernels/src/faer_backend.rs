@@ -48,10 +48,7 @@ fn col_ptr_u32(p: &CsrPattern) -> Result<Vec<u32>, SolveError> {
     Ok(p.row_ptr().iter().map(|&x| x as u32).collect())
 }
 
-/// `true` when both slices have the same length and bit-identical entries.
-pub(crate) fn same_bits(a: &[f64], b: &[f64]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
-}
+pub(crate) use crate::backend::same_bits;
 
 fn faer_err(e: impl std::fmt::Debug) -> SolveError {
     SolveError::Other(format!("faer: {e:?}"))

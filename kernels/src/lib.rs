@@ -25,9 +25,9 @@ pub mod pcg;
 pub mod split;
 
 pub use assembly::{AssemblyPlan, Connectivity, CONSTRAINED};
-pub use backend::{backend_from_name, LinearBackend, SolveError, SolverStats, BACKENDS};
+pub use backend::{backend_from_name, same_bits, LinearBackend, SolveError, SolverStats, BACKENDS};
 pub use csr::{CsrMatrix, CsrPattern};
 pub use faer_backend::{FaerCholesky, FaerLdlt, FaerLu};
-pub use ordering::FillOrdering;
+pub use ordering::{metis_partition, FillOrdering};
 pub use pcg::{BlockNodes2d, CoarseCorrection, CoarseSpace, Pcg, Preconditioner};
 pub use split::FaerCholeskySplit;

@@ -199,3 +199,68 @@ pub(crate) fn metis_separator(pattern: &CsrPattern) -> Result<Vec<u8>, SolveErro
     }
     Ok(out)
 }
+
+/// A partition of the unknowns of `pattern` into `nparts` parts of nearly equal size with
+/// few couplings between parts (METIS k-way, `METIS_PartGraphKway`, on the node graph:
+/// the components of a node stay together). Returns the part of each unknown. For
+/// distributing the rows of a matrix over MPI ranks. Deterministic (METIS' fixed seed).
+pub fn metis_partition(pattern: &CsrPattern, nparts: usize) -> Result<Vec<u32>, SolveError> {
+    let n = pattern.n();
+    if nparts <= 1 || n == 0 {
+        return Ok(vec![0; n]);
+    }
+    let mut g = node_graph(pattern)?;
+    let nv = g.first.len() - 1;
+    if nv < nparts {
+        // fewer vertices than parts: one vertex per part, the rest empty
+        let mut out = vec![0u32; n];
+        for v in 0..nv {
+            out[g.first[v]..g.first[v + 1]].fill(v as u32);
+        }
+        return Ok(out);
+    }
+    let mut part = vec![0i32; nv];
+    let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
+    let (mut nvtxs, mut ncon, mut np, mut cut) = (nv as i32, 1i32, nparts as i32, 0i32);
+    let status = {
+        let _guard = METIS_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+        // SAFETY: array lengths as METIS expects (xadj nv + 1, adjncy xadj[nv], vwgt and
+        // part nv, options METIS_NOPTIONS); symmetric graph without self loops; null
+        // pointers for the optional arrays.
+        unsafe {
+            metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
+            options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
+            metis_sys::METIS_PartGraphKway(
+                &mut nvtxs,
+                &mut ncon,
+                g.xadj.as_mut_ptr(),
+                g.adjncy.as_mut_ptr(),
+                g.vwgt.as_mut_ptr(),
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+                &mut np,
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+                options.as_mut_ptr(),
+                &mut cut,
+                part.as_mut_ptr(),
+            )
+        }
+    };
+    if status != metis_sys::rstatus_et_METIS_OK {
+        return Err(SolveError::Other(format!(
+            "METIS_PartGraphKway failed with status {status}"
+        )));
+    }
+    let mut out = vec![0u32; n];
+    for v in 0..nv {
+        let p = part[v];
+        if !(0..nparts as i32).contains(&p) {
+            return Err(SolveError::Other(
+                "METIS returned an invalid partition".into(),
+            ));
+        }
+        out[g.first[v]..g.first[v + 1]].fill(p as u32);
+    }
+    Ok(out)
+}

@@ -489,7 +489,7 @@ impl<'a> Dynamics<'a> {
             .stiffness_into(&self.cur, &local, &mut self.kbuf);
         let mut x = self.f_static.clone();
         let ok = self.backend.factorize(&self.kbuf).is_ok()
-            && self.backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO
+            && !super::singular_pivots(&*self.backend)
             && self.backend.solve(&mut x).is_ok()
             && x.iter().all(|v| v.is_finite());
         if !ok || norm(&self.f_static) == 0.0 {

@@ -87,6 +87,14 @@ pub struct Outcome {
 /// blocks stay far above 1e-12.
 pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 
+/// Whether the backend's last factorization showed a singular matrix by its pivot ratio
+/// ([`SINGULAR_PIVOT_RATIO`]). A backend that does not measure pivots reports NaN (PCG,
+/// PETSc; MUMPS when its null-pivot detection found nothing): not singular by this test,
+/// its factorization or solve fails instead on a mechanism.
+pub fn singular_pivots(backend: &dyn crate::solve::LinearBackend) -> bool {
+    backend.stats().min_pivot_ratio < SINGULAR_PIVOT_RATIO
+}
+
 /// Run the scene's analysis.
 pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Result<Outcome> {
     run_with(

@@ -291,8 +291,7 @@ impl<'a> Driver<'a> {
             let local = self.elastic_local();
             let mut k = CsrMatrix::zeros(self.system.plan.pattern().clone());
             self.system.stiffness_into(&self.cur, &local, &mut k);
-            let ok = self.backend.factorize(&k).is_ok()
-                && self.backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO;
+            let ok = self.backend.factorize(&k).is_ok() && !super::singular_pivots(&*self.backend);
             self.held = Held::K0;
             if !ok {
                 return Ok(false);
@@ -327,7 +326,7 @@ impl<'a> Driver<'a> {
                     &mut *self.backend
                 };
                 let ok = backend.factorize(&self.kbuf).is_ok()
-                    && (newton || backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO)
+                    && (newton || !super::singular_pivots(&*backend))
                     && backend.solve(&mut x).is_ok()
                     && x.iter().all(|v| v.is_finite());
                 // LU has no pivot measure: a matrix singular up to round-off shows as a
@@ -533,7 +532,7 @@ impl<'a> Driver<'a> {
                     .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
                 let mut x = r.clone();
                 let ok = self.backend.factorize(&self.kbuf).is_ok()
-                    && self.backend.stats().min_pivot_ratio >= super::SINGULAR_PIVOT_RATIO
+                    && !super::singular_pivots(&*self.backend)
                     && self.backend.solve(&mut x).is_ok()
                     && x.iter().all(|v| v.is_finite());
                 self.held = Held::Secant(trial.state.clone());

@@ -35,9 +35,14 @@ enum Command {
         /// Worker threads (default: all cores). Results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
-        /// Linear backend.
+        /// Linear backend: faer-cholesky (default), faer-ldlt, faer-lu, pcg, ..., and with
+        /// the cargo features of the same name mumps, mumps-spd, mumps-lu, petsc.
         #[arg(long, default_value = solve::DEFAULT)]
         solver: String,
+        /// Options for PETSc's database when --solver petsc, as on PETSc's command line
+        /// (default: -ksp_type cg -pc_type gamg, rtol 1e-12).
+        #[arg(long, value_name = "OPTIONS", allow_hyphen_values = true)]
+        petsc_options: Option<String>,
         /// Print nothing but errors (and the --log-json lines, when asked for).
         #[arg(long)]
         quiet: bool,
@@ -86,6 +91,20 @@ enum Command {
         #[arg(long)]
         list: bool,
     },
+    /// Run every linear backend of this build on the scene's stiffness matrix (the elastic
+    /// one of the first solve) and print one table: setup, factorization or preconditioner
+    /// set-up, solve, iterations, memory, true residual.
+    BenchSolvers {
+        scene: PathBuf,
+        /// Comma-separated backends to run (default: every one compiled in).
+        #[arg(long, value_delimiter = ',')]
+        solvers: Vec<String>,
+        /// Options for PETSc's database (as for `run`).
+        #[arg(long, value_name = "OPTIONS", allow_hyphen_values = true)]
+        petsc_options: Option<String>,
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Write the stiffness matrix at the first solve (and the load vector) in Matrix Market.
     ExportMatrix {
         scene: PathBuf,
@@ -133,7 +152,10 @@ pub fn main() -> ExitCode {
         eprintln!("dfem: internal error ({info}); this is a bug, please report it with the scene that caused it");
     }));
     let cli = Cli::parse();
-    match dispatch(cli) {
+    let r = dispatch(cli);
+    // every backend is dropped by now: end PETSc/MPI if they were started
+    dfem_ffi::finalize();
+    match r {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
@@ -198,6 +220,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             out,
             threads: n,
             solver,
+            petsc_options,
             quiet,
             no_plots,
             amplification,
@@ -206,8 +229,15 @@ fn dispatch(cli: Cli) -> Result<()> {
         } => {
             threads(n)?;
             check_amplification(amplification)?;
-            let mut prog = progress::CliProgress::new(quiet, log_json);
-            let mut backend = solve::backend(&solver)?;
+            // under mpirun (feature `mpi`) every rank runs the analysis, its linear solves
+            // together; rank 0 alone reports and writes the results
+            let (rank, _) = dfem_ffi::process_rank();
+            let quiet = quiet || rank != 0;
+            let mut prog = progress::CliProgress::new(quiet, log_json && rank == 0);
+            let opts = solve::BackendOptions {
+                petsc_options: petsc_options.unwrap_or_default(),
+            };
+            let mut backend = solve::backend_with(&solver, &opts)?;
             let sc = read_scene(file.as_deref(), example.as_deref())?;
             if !quiet {
                 for w in &sc.warnings {
@@ -217,6 +247,20 @@ fn dispatch(cli: Cli) -> Result<()> {
             prog.stage("meshing");
             let m = mesh::build(&sc);
             check_memory(&sc, &m, memory_limit)?;
+            backend
+                .set_near_null_space(&solve::rigid_body_modes(&m))
+                .map_err(|e| Error::new(e.to_string()).place("option --solver"))?;
+            if rank != 0 {
+                analysis::run_with(
+                    &sc,
+                    &m,
+                    backend.as_mut(),
+                    &mut prog,
+                    &mut analysis::dynamics::NoMonitor,
+                )
+                .map_err(|e| e.in_file(sc.file.as_deref().unwrap_or(Path::new("scene"))))?;
+                return Ok(());
+            }
             let outcome = if sc.analysis.kind == scene::AnalysisType::Dynamic {
                 let mut w = output::StreamWriter::new(&out, &sc, &m)?;
                 analysis::run_with(&sc, &m, backend.as_mut(), &mut prog, &mut w)
@@ -359,6 +403,50 @@ fn dispatch(cli: Cli) -> Result<()> {
                     Ok(())
                 }
             }
+        }
+        Command::BenchSolvers {
+            scene: file,
+            solvers,
+            petsc_options,
+            threads: n,
+        } => {
+            threads(n)?;
+            let t0 = std::time::Instant::now();
+            let sc = scene::load(&file)?;
+            let m = mesh::build(&sc);
+            let system = crate::assembly::System::new(&sc, &m);
+            let k = system.stiffness(&m, &analysis::elastic_springs(&sc, &m));
+            let f = analysis::external_load(&sc, &m);
+            let t_model = t0.elapsed().as_secs_f64();
+            let available = solve::available_names();
+            let names: Vec<&str> = if solvers.is_empty() {
+                available.clone()
+            } else {
+                solvers.iter().map(String::as_str).collect()
+            };
+            for name in &names {
+                if !solve::all_names().contains(name) {
+                    return Err(Error::new(format!("unknown linear backend '{name}'"))
+                        .place("option --solvers")
+                        .fix(format!("use some of: {}", available.join(", "))));
+                }
+            }
+            let opts = solve::BackendOptions {
+                petsc_options: petsc_options.unwrap_or_default(),
+            };
+            let rows = solve::bench::bench(&k, &f, &solve::rigid_body_modes(&m), &names, &opts);
+            println!(
+                "{}: {} unknowns, {} stored entries, {} blocks, {} contacts; model built in {:.2} s; {} threads\n",
+                file.display(),
+                k.pattern.n(),
+                k.pattern.nnz(),
+                m.blocks.len(),
+                m.contacts.len(),
+                t_model,
+                rayon::current_num_threads()
+            );
+            print!("{}", solve::bench::table(&rows));
+            Ok(())
         }
         Command::ExportMatrix {
             scene: file,

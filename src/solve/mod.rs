@@ -1,17 +1,97 @@
 //! Linear backend selection (the PETSc pattern: chosen at run time by name, a backend not
 //! compiled in is an error, not a crash).
 
+pub use dfem_ffi::FfiOptions as BackendOptions;
 pub use dfem_kernels::{LinearBackend, SolveError, BACKENDS};
 
 /// Default backend: faer's supernodal Cholesky (LLᵀ) with the symbolic phase cached.
 pub const DEFAULT: &str = "faer-cholesky";
 
-/// Build a backend from its name (`--solver`).
+/// Every backend name `--solver` knows: the built-in ones ([`BACKENDS`]) and those of
+/// `dfem-ffi` (MUMPS, PETSc), whether compiled in or not.
+pub fn all_names() -> Vec<&'static str> {
+    BACKENDS
+        .iter()
+        .copied()
+        .chain(dfem_ffi::ALL.iter().map(|(n, _)| *n))
+        .collect()
+}
+
+/// The backends compiled into this build (what `dfem bench-solvers` runs).
+pub fn available_names() -> Vec<&'static str> {
+    BACKENDS.iter().chain(dfem_ffi::BACKENDS).copied().collect()
+}
+
+/// Build a backend from its name (`--solver`) with default options.
 pub fn backend(name: &str) -> crate::Result<Box<dyn LinearBackend>> {
-    dfem_kernels::backend_from_name(name).map_err(|e| {
-        crate::Error::new(e)
+    backend_with(name, &BackendOptions::default())
+}
+
+/// Build a backend from its name (`--solver`) and options (`--petsc-options`).
+pub fn backend_with(name: &str, opts: &BackendOptions) -> crate::Result<Box<dyn LinearBackend>> {
+    if let Some(built) = dfem_ffi::backend_from_name(name, opts) {
+        return built.map_err(|e| {
+            let feature = dfem_ffi::ALL
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map_or("", |(_, f)| *f);
+            crate::Error::new(e).place("option --solver").fix(format!(
+                "build dfem with `--features {feature}` on a machine with the libraries \
+                 installed, or use one of: {}",
+                available_names().join(", ")
+            ))
+        });
+    }
+    dfem_kernels::backend_from_name(name).map_err(|_| {
+        crate::Error::new(format!("unknown linear backend '{name}'"))
             .place("option --solver")
-            .fix(format!("use one of: {}", BACKENDS.join(", ")))
+            .fix(format!(
+                "use one of: {} (available in this build: {})",
+                all_names().join(", "),
+                available_names().join(", ")
+            ))
     })
 }
+
+/// The rigid-body modes of the blocks, as the near-null space of the stiffness matrix
+/// ([`LinearBackend::set_near_null_space`]): three vectors of length `mesh.n_dofs`, the
+/// translation in x, the translation in y and the in-plane rotation, each block moving
+/// rigidly about its own centroid (METHOD.md §2: a block's elastic energy vanishes on these
+/// motions; only the contact springs of §3 resist them). On a deformable block's node at
+/// (x, y) the rotation is (−(y − y_c), x − x_c); a rigid block's unknowns (u, v, θ) get
+/// (1, 0, 0), (0, 1, 0), (0, 0, 1). Lengths in m; fixed blocks have no unknowns.
+pub fn rigid_body_modes(mesh: &crate::mesh::Mesh) -> Vec<Vec<f64>> {
+    use crate::mesh::BlockDofs;
+    let n = mesh.n_dofs;
+    let mut modes = vec![vec![0.0; n]; 3];
+    for b in &mesh.blocks {
+        match b.dofs {
+            BlockDofs::Fixed => {}
+            BlockDofs::Rigid { first, .. } => {
+                for (k, mode) in modes.iter_mut().enumerate() {
+                    mode[first as usize + k] = 1.0;
+                }
+            }
+            BlockDofs::Deformable => {
+                let c = b.centroid;
+                for node in b.nodes.clone() {
+                    let d = mesh.node_dofs[node as usize];
+                    let p = mesh.nodes[node as usize];
+                    let rot = [-(p[1] - c[1]), p[0] - c[0]];
+                    for comp in 0..2 {
+                        let k = d[comp];
+                        if k == dfem_kernels::CONSTRAINED {
+                            continue;
+                        }
+                        modes[comp][k as usize] = 1.0;
+                        modes[2][k as usize] = rot[comp];
+                    }
+                }
+            }
+        }
+    }
+    modes
+}
+
+pub mod bench;
 pub mod reuse;

@@ -54,3 +54,56 @@ friction_angle = {phi}
 "#
     )
 }
+
+/// Solve a scene with the backend `name` (its near-null space set to the blocks' rigid-body
+/// modes, as `dfem run` does).
+pub fn solve_with(sc: &Scene, name: &str) -> (Mesh, Outcome) {
+    solve_with_options(sc, name, "")
+}
+
+/// [`solve_with`] with PETSc options (`--petsc-options`).
+pub fn solve_with_options(sc: &Scene, name: &str, petsc_options: &str) -> (Mesh, Outcome) {
+    let m = mesh::build(sc);
+    let opts = dfem::solve::BackendOptions {
+        petsc_options: petsc_options.to_string(),
+    };
+    let mut backend =
+        dfem::solve::backend_with(name, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
+    backend
+        .set_near_null_space(&dfem::solve::rigid_body_modes(&m))
+        .unwrap();
+    let out = analysis::run(sc, &m, backend.as_mut()).unwrap_or_else(|e| panic!("{name}: {e}"));
+    (m, out)
+}
+
+/// Every backend of dfem-ffi compiled in (MUMPS, PETSc) gives the unknowns of faer's
+/// Cholesky to `1e-8` relative (max norm over the max of faer's), with the same status.
+/// 1e-8: the direct solvers differ by round-off times the condition number (the stiff
+/// joints of the validation scenes make it ~1e6–1e8 in the worst case), PETSc's CG stops at
+/// a relative residual of 1e-12 (its default here); the out-of-balance tolerance of the
+/// secant iterations (1e-8 and below) bounds what can differ after them. `petsc_options`
+/// go to the PETSc backend (empty: its default CG + GAMG).
+pub fn assert_ffi_backends_match_faer(sc: &Scene, petsc_options: &str) {
+    let (_, reference) = solve(sc);
+    let umax = reference.u.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    assert!(umax > 0.0);
+    for name in dfem_ffi::BACKENDS {
+        let (_, out) = solve_with_options(sc, name, petsc_options);
+        assert_eq!(out.status, reference.status, "{name}");
+        let err = out
+            .u
+            .iter()
+            .zip(&reference.u)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{name}: max |u - u_faer| / max |u_faer| = {:.2e}",
+            err / umax
+        );
+        assert!(
+            err <= 1e-8 * umax,
+            "{name}: relative difference {:e}",
+            err / umax
+        );
+    }
+}

@@ -1,0 +1,135 @@
+//! `dfem bench-solvers`: every linear backend of this build on one matrix, the elastic
+//! stiffness of a scene at its first solve (K of METHOD.md §2–3 with the contacts'
+//! elastic springs, the load vector of the scene), and one table of what each costs.
+
+use super::{backend_with, BackendOptions};
+use dfem_kernels::CsrMatrix;
+use std::time::Instant;
+
+/// One backend's measurements on the matrix.
+#[derive(Debug, Clone)]
+pub struct BenchRow {
+    pub name: String,
+    /// Symbolic phase (ordering, elimination tree; PETSc: matrix creation), s.
+    pub setup_s: f64,
+    /// Numeric factorization or preconditioner set-up, s.
+    pub factor_s: f64,
+    /// One solve, s.
+    pub solve_s: f64,
+    /// Krylov iterations (0 for the direct solvers).
+    pub iterations: usize,
+    /// Entries of the factor (direct solvers; 0 when not reported).
+    pub factor_nnz: usize,
+    /// Memory reported by the backend, bytes (0 when not reported).
+    pub memory_bytes: usize,
+    /// ‖b − A x‖₂ / ‖b‖₂ recomputed here from the matrix.
+    pub residual: f64,
+    /// Why the backend failed, if it did.
+    pub error: Option<String>,
+}
+
+/// Runs each backend of `names` once on `k x = b` (a new instance each, so every phase
+/// is timed from scratch), with the near-null space `modes` (ignored by the direct ones).
+pub fn bench(
+    k: &CsrMatrix,
+    b: &[f64],
+    modes: &[Vec<f64>],
+    names: &[&str],
+    opts: &BackendOptions,
+) -> Vec<BenchRow> {
+    names
+        .iter()
+        .map(|name| {
+            let mut row = BenchRow {
+                name: name.to_string(),
+                setup_s: f64::NAN,
+                factor_s: f64::NAN,
+                solve_s: f64::NAN,
+                iterations: 0,
+                factor_nnz: 0,
+                memory_bytes: 0,
+                residual: f64::NAN,
+                error: None,
+            };
+            if let Err(e) = run_one(k, b, modes, name, opts, &mut row) {
+                row.error = Some(e);
+            }
+            row
+        })
+        .collect()
+}
+
+fn run_one(
+    k: &CsrMatrix,
+    b: &[f64],
+    modes: &[Vec<f64>],
+    name: &str,
+    opts: &BackendOptions,
+    row: &mut BenchRow,
+) -> Result<(), String> {
+    let mut be = backend_with(name, opts).map_err(|e| e.to_string())?;
+    be.set_near_null_space(modes).map_err(|e| e.to_string())?;
+    let t = Instant::now();
+    be.analyze(&k.pattern).map_err(|e| e.to_string())?;
+    row.setup_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    be.factorize(k).map_err(|e| e.to_string())?;
+    row.factor_s = t.elapsed().as_secs_f64();
+    let mut x = b.to_vec();
+    let t = Instant::now();
+    let solved = be.solve(&mut x);
+    row.solve_s = t.elapsed().as_secs_f64();
+    let s = be.stats();
+    row.iterations = s.last_iterations;
+    row.factor_nnz = s.factor_nnz;
+    row.memory_bytes = s.memory_bytes;
+    row.residual = relative_residual(k, &x, b);
+    solved.map_err(|e| e.to_string())
+}
+
+/// ‖b − A x‖₂ / ‖b‖₂.
+pub fn relative_residual(a: &CsrMatrix, x: &[f64], b: &[f64]) -> f64 {
+    let mut ax = vec![0.0; b.len()];
+    a.mul_vec(x, &mut ax);
+    let r: f64 = ax.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum();
+    let bn: f64 = b.iter().map(|v| v * v).sum();
+    (r / bn).sqrt()
+}
+
+/// The table as markdown.
+pub fn table(rows: &[BenchRow]) -> String {
+    let mut s = String::from(
+        "| backend | setup (s) | factor / precond. (s) | solve (s) | total (s) | iterations | factor nnz | memory (MB) | true residual |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    let num = |v: usize| {
+        if v == 0 {
+            "-".to_string()
+        } else {
+            format!("{:.2}M", v as f64 / 1e6)
+        }
+    };
+    for r in rows {
+        let total = r.setup_s + r.factor_s + r.solve_s;
+        s += &format!(
+            "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {} | {} | {:.1e}{} |\n",
+            r.name,
+            r.setup_s,
+            r.factor_s,
+            r.solve_s,
+            total,
+            r.iterations,
+            num(r.factor_nnz),
+            if r.memory_bytes == 0 {
+                "-".to_string()
+            } else {
+                format!("{:.0}", r.memory_bytes as f64 / 1e6)
+            },
+            r.residual,
+            r.error
+                .as_ref()
+                .map(|e| format!(" (failed: {e})"))
+                .unwrap_or_default()
+        );
+    }
+    s
+}

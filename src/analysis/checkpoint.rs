@@ -98,9 +98,9 @@ pub fn encode(source: &str, fingerprint: u64, state: &Checkpoint) -> Vec<u8> {
 /// Read a checkpoint file back; `path` names it in the errors.
 pub fn decode(bytes: &[u8], path: &Path) -> Result<Saved> {
     let bad = |what: String| {
-        Error::new(what).file(path).fix(
-            "run the analysis again without --resume (the checkpoint cannot be used)",
-        )
+        Error::new(what)
+            .file(path)
+            .fix("run the analysis again without --resume (the checkpoint cannot be used)")
     };
     if bytes.len() < 12 || &bytes[..8] != MAGIC {
         return Err(bad("not a dfem checkpoint".into()));
@@ -111,8 +111,7 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<Saved> {
             "checkpoint format version {version}; this dfem reads version {VERSION}"
         )));
     }
-    postcard::from_bytes(&bytes[12..])
-        .map_err(|e| bad(format!("the checkpoint is damaged ({e})")))
+    postcard::from_bytes(&bytes[12..]).map_err(|e| bad(format!("the checkpoint is damaged ({e})")))
 }
 
 #[cfg(test)]

@@ -40,8 +40,8 @@
 //! re-detection of contacts between steps would rebuild [`System`] and the buffers in
 //! [`Dynamics::retopologize`] — the seam left for large motions with new contacts.
 
-use super::config::{evaluate, secant_local, Committed, Trial};
 use super::checkpoint::Checkpoint;
+use super::config::{evaluate, secant_local, Committed, Trial};
 use super::contact_search;
 use super::{fit_motion, Outcome, Stats, Status};
 use crate::assembly::{loads, mass, LocalStiffness, System};

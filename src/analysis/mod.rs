@@ -29,7 +29,9 @@ pub enum Status {
     },
     /// A dynamic run stopped on request (Ctrl-C) after the step that reached `time` (s);
     /// its checkpoint lets `dfem run --resume` continue it.
-    Interrupted { time: f64 },
+    Interrupted {
+        time: f64,
+    },
 }
 
 /// Counters written to `summary.json` stats.

@@ -282,7 +282,11 @@ impl<'a> StreamWriter<'a> {
         let header = lines.next().unwrap_or_default().to_string();
         let rows: Vec<Vec<f64>> = lines
             .take(c.step + 1)
-            .map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect())
+            .map(|l| {
+                l.split(',')
+                    .map(|v| v.parse().unwrap_or(f64::NAN))
+                    .collect()
+            })
             .collect();
         let width = header.split(',').count();
         if rows.len() != c.step + 1 || rows.iter().any(|r| r.len() != width) {

@@ -217,8 +217,14 @@ pub struct StreamWriter<'a> {
     stop: Arc<AtomicBool>,
     /// [`STOP_AFTER_STEP`].
     stop_after: Option<usize>,
-    /// Resuming: the history rows and frames of the run before its checkpoint.
-    resumed: Option<(Vec<Vec<f64>>, Vec<(f64, usize)>)>,
+    /// Resuming: the run before its checkpoint.
+    resumed: Option<Before>,
+}
+
+/// The history rows and the frames (time s, step) of a run before its checkpoint.
+struct Before {
+    rows: Vec<Vec<f64>>,
+    frames: Vec<(f64, usize)>,
 }
 
 /// Where a scene came from, as a checkpoint records it: the absolute path of its file, or
@@ -306,27 +312,27 @@ impl<'a> StreamWriter<'a> {
         write_atomic(&path, kept.as_bytes())?;
         let settings = crate::analysis::dynamics::Settings::from_scene(scene)?;
         let every = scene.output.every.max(1);
-        if c.step % every != 0 {
+        if !c.step.is_multiple_of(every) {
             // the final state an interrupted run wrote between two frames
             for part in ["blocks", "contacts"] {
                 let _ = std::fs::remove_file(dir.join(format!("{part}_{:04}.vtu", c.step)));
             }
         }
         let frames: Vec<(f64, usize)> = (0..=c.step)
-            .filter(|k| k % every == 0 && dir.join(format!("blocks_{k:04}.vtu")).exists())
+            .filter(|k| k.is_multiple_of(every) && dir.join(format!("blocks_{k:04}.vtu")).exists())
             .map(|k| (crate::analysis::dynamics::step_time(&settings, k), k))
             .collect();
         w.frames = frames.clone();
-        w.resumed = Some((rows, frames));
+        w.resumed = Some(Before { rows, frames });
         Ok(w)
     }
 
     /// Put the history rows and frames of the run before the checkpoint in front of the
     /// outcome's (which holds those after it).
     pub fn complete(&self, out: &mut Outcome) {
-        if let (Some((rows, frames)), Some(h)) = (&self.resumed, out.history.as_mut()) {
-            h.rows.splice(0..0, rows.iter().cloned());
-            h.frames.splice(0..0, frames.iter().copied());
+        if let (Some(b), Some(h)) = (&self.resumed, out.history.as_mut()) {
+            h.rows.splice(0..0, b.rows.iter().cloned());
+            h.frames.splice(0..0, b.frames.iter().copied());
         }
     }
 
@@ -372,7 +378,7 @@ impl Monitor for StreamWriter<'_> {
     fn checkpoint_due(&mut self, step: usize) -> bool {
         step == 0
             || match self.scene.output.checkpoint_every {
-                Some(n) => step % n == 0,
+                Some(n) => step.is_multiple_of(n),
                 None => self.last_checkpoint.elapsed() >= Duration::from_secs(CHECKPOINT_SECONDS),
             }
     }

@@ -180,39 +180,44 @@ fn resume(dir: &Path) -> Output {
 
 #[test]
 fn stopped_run_is_valid_and_resumes_to_the_same_history() {
-    let dir = common::tmp_dir("resume_stop");
-    let scene = scene_file(&dir);
-    let out = dir.join("out");
-    // step 1234: between checkpoints (every 50) and between frames (every 40)
-    let k = 1234;
-    let o = dfem(
-        &[
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        Some(k),
-    );
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(130), "{stderr}");
-    assert!(stderr.contains("dfem run --resume"), "{stderr}");
-    assert_eq!(check_partial(&out), k);
-    let s = summary(&out);
-    assert_eq!(s["status"], "interrupted");
-    assert!(
-        (s["time"].as_f64().unwrap() - k as f64 * DT).abs() < 1e-12,
-        "{s}"
-    );
-    assert!(out.join("blocks_1234.vtu").exists(), "the state reached");
-    assert!(out.join("checkpoint.bin").exists());
-    // the partial history is the beginning of the uninterrupted one
-    let partial = read(&out, "history.csv");
-    assert!(read(reference(), "history.csv").starts_with(&partial));
+    // step 1234: between checkpoints (every 50) and between frames (every 40); step 0:
+    // stopped before the first step, resumed from the initial checkpoint
+    for k in [1234, 0] {
+        let dir = common::tmp_dir(&format!("resume_stop_{k}"));
+        let scene = scene_file(&dir);
+        let out = dir.join("out");
+        let o = dfem(
+            &[
+                "run",
+                scene.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            Some(k),
+        );
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(130), "{stderr}");
+        assert!(stderr.contains("dfem run --resume"), "{stderr}");
+        assert_eq!(check_partial(&out), k);
+        let s = summary(&out);
+        assert_eq!(s["status"], "interrupted");
+        assert!(
+            (s["time"].as_f64().unwrap() - k as f64 * DT).abs() < 1e-12,
+            "{s}"
+        );
+        assert!(
+            out.join(format!("blocks_{k:04}.vtu")).exists(),
+            "the state reached"
+        );
+        assert!(out.join("checkpoint.bin").exists());
+        // the partial history is the beginning of the uninterrupted one
+        let partial = read(&out, "history.csv");
+        assert!(read(reference(), "history.csv").starts_with(&partial));
 
-    let o = resume(&out);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    check_same_as_reference(&out);
+        let o = resume(&out);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        check_same_as_reference(&out);
+    }
 }
 
 /// Start the run as a child process and wait until history.csv holds `rows` rows.

@@ -1144,6 +1144,7 @@ pub fn run_from(
     let mut d = Dynamics::new(scene, mesh, backend)?;
     // counters of the part of the run before the checkpoint
     let mut before = Stats::default();
+    let resumed = from.is_some();
     let first = match from {
         Some(c) => {
             before = c.stats.clone();
@@ -1159,10 +1160,10 @@ pub fn run_from(
         let mut s = d.stats.clone();
         s.factorizations = before.factorizations + bs.numeric_factorizations;
         s.symbolic_factorizations = before.symbolic_factorizations + bs.symbolic_factorizations;
-        s.min_pivot_ratio = if first == 0 {
-            bs.min_pivot_ratio
-        } else {
+        s.min_pivot_ratio = if resumed {
             bs.min_pivot_ratio.min(before.min_pivot_ratio)
+        } else {
+            bs.min_pivot_ratio
         };
         s.wall_time_s = before.wall_time_s + start.elapsed().as_secs_f64();
         s
@@ -1221,7 +1222,7 @@ pub fn run_from(
     let every = scene.output.every.max(1);
     let frames = scene.output.vtk;
     let mut status = Status::Stable;
-    if first == 0 {
+    if !resumed {
         let r0 = row(&d);
         monitor.row(&r0)?;
         history.rows.push(r0);

@@ -128,6 +128,7 @@ fn run_case(courses: usize, bricks: usize, strategy: &str, tolerance: f64, brack
             let message = match &out.status {
                 dfem::analysis::Status::Stable => "stable".to_string(),
                 dfem::analysis::Status::Failed { reason, .. } => reason.clone(),
+                dfem::analysis::Status::Interrupted { time } => format!("interrupted at {time} s"),
             };
             let lambda = out
                 .load_factor

@@ -91,6 +91,7 @@ fn every_file_has_a_test() {
 
 cases! {
     all_fixed,
+    checkpoint_every_zero,
     degenerate_collinear,
     degenerate_two_vertices,
     dt_longer_than_duration,

@@ -10,7 +10,7 @@ use crate::mesh::{BlockDofs, Mesh};
 use dfem_kernels::CONSTRAINED;
 
 /// What is committed at the end of a converged increment.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Committed {
     /// Cauchy stress of every triangle (σxx, σyy, σxy) (Pa), in the current frame.
     pub stress: Vec<[f64; 3]>,

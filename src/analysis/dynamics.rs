@@ -40,6 +40,7 @@
 //! re-detection of contacts between steps would rebuild [`System`] and the buffers in
 //! [`Dynamics::retopologize`] — the seam left for large motions with new contacts.
 
+use super::checkpoint::Checkpoint;
 use super::config::{evaluate, secant_local, Committed, Trial};
 use super::contact_search;
 use super::{fit_motion, Outcome, Stats, Status};
@@ -232,6 +233,19 @@ pub trait Monitor {
     fn frame(&mut self, _step: usize, _time: f64, _state: &Outcome) -> Result<()> {
         Ok(())
     }
+    /// Whether the run should stop after step `step` (Ctrl-C): the driver then writes a
+    /// checkpoint and returns [`Status::Interrupted`].
+    fn stop_requested(&mut self, _step: usize) -> bool {
+        false
+    }
+    /// Whether a checkpoint is due after step `step` (0: the initial state).
+    fn checkpoint_due(&mut self, _step: usize) -> bool {
+        false
+    }
+    /// A checkpoint ([`Dynamics::checkpoint`]) and the state it holds.
+    fn checkpoint(&mut self, _c: &Checkpoint, _state: &Outcome) -> Result<()> {
+        Ok(())
+    }
 }
 
 /// A monitor that keeps nothing (the history is also in the outcome).
@@ -239,7 +253,7 @@ pub struct NoMonitor;
 impl Monitor for NoMonitor {}
 
 /// Energy terms (J), see the module documentation.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Energy {
     pub kinetic: f64,
     pub elastic: f64,
@@ -586,18 +600,61 @@ impl<'a> Dynamics<'a> {
         if dropped + added == 0 {
             return false;
         }
-        self.system = System::for_dynamics(self.scene, &self.cur);
+        self.rebuild_system();
         // the internal force of the committed state with the new contact set
         let now = self.trial(&vec![0.0; self.cur.n_dofs]);
         self.f_int = now.f_int;
+        self.stats.contact_topologies += 1;
+        true
+    }
+
+    /// The system, its pattern and the matrix buffers for the contact set of `cur`.
+    fn rebuild_system(&mut self) {
+        self.system = System::for_dynamics(self.scene, &self.cur);
         let pattern = self.system.plan.pattern().clone();
         self.diag = pattern.diagonal_positions();
         self.kbuf = CsrMatrix::zeros(pattern.clone());
         if self.cbuf.is_some() {
             self.cbuf = Some(CsrMatrix::zeros(pattern));
         }
-        self.stats.contact_topologies += 1;
-        true
+    }
+
+    /// The state after `step` completed time steps, for `dfem run --resume`
+    /// ([`checkpoint`]).
+    pub fn checkpoint(&self, step: usize) -> Checkpoint {
+        Checkpoint {
+            step,
+            time: self.time,
+            mesh: self.cur.clone(),
+            committed: self.committed.clone(),
+            v: self.v.clone(),
+            a: self.a.clone(),
+            f_int: self.f_int.clone(),
+            f_visc: self.f_visc.clone(),
+            energy: self.energy,
+            stats: self.stats.clone(),
+        }
+    }
+
+    /// Continue from a checkpoint of the same scene: the state is taken as saved, the
+    /// contact coefficients, the system and its buffers are rebuilt for its contact set.
+    /// Returns the number of completed steps.
+    pub fn restore(&mut self, c: Checkpoint) -> usize {
+        self.time = c.time;
+        self.cur = c.mesh;
+        self.committed = c.committed;
+        self.v = c.v;
+        self.a = c.a;
+        self.f_int = c.f_int;
+        self.f_visc = c.f_visc;
+        self.energy = c.energy;
+        self.stats = c.stats;
+        let (area, springs, visc) = contact_coefficients(self.scene, &self.law, &self.cur.contacts);
+        self.area = area;
+        self.springs = springs;
+        self.visc = visc;
+        self.rebuild_system();
+        c.step
     }
 
     /// The ground acceleration vector (m/s²) at time t.
@@ -1053,6 +1110,16 @@ pub const EXTRA_COLUMNS: &[&str] = &[
     "E_error",
 ];
 
+/// The time (s) at the end of step `k` of a run with time step `dt` lasting `duration`.
+pub fn step_time(settings: &Settings, k: usize) -> f64 {
+    (k as f64 * settings.dt).min(settings.duration.max(settings.dt))
+}
+
+/// The number of time steps of a run.
+pub fn step_count(settings: &Settings) -> usize {
+    (settings.duration / settings.dt - 1e-9).ceil().max(1.0) as usize
+}
+
 /// Run a dynamic analysis, streaming the history and frames to `monitor`.
 pub fn run(
     scene: &Scene,
@@ -1060,9 +1127,59 @@ pub fn run(
     backend: &mut dyn LinearBackend,
     monitor: &mut dyn Monitor,
 ) -> Result<Outcome> {
+    run_from(scene, mesh, backend, monitor, None)
+}
+
+/// [`run`], or its continuation from a checkpoint `from` of the same scene: the rows and
+/// frames up to the checkpoint's step are neither computed nor sent to `monitor` again,
+/// and the outcome's history holds only the rows after it.
+pub fn run_from(
+    scene: &Scene,
+    mesh: &Mesh,
+    backend: &mut dyn LinearBackend,
+    monitor: &mut dyn Monitor,
+    from: Option<Checkpoint>,
+) -> Result<Outcome> {
     let start = Instant::now();
     let mut d = Dynamics::new(scene, mesh, backend)?;
-    d.update_contacts();
+    // counters of the part of the run before the checkpoint
+    let mut before = Stats::default();
+    let resumed = from.is_some();
+    let first = match from {
+        Some(c) => {
+            before = c.stats.clone();
+            d.restore(c)
+        }
+        None => {
+            d.update_contacts();
+            0
+        }
+    };
+    let counted = |d: &Dynamics| -> Stats {
+        let bs = d.backend.stats();
+        let mut s = d.stats.clone();
+        s.factorizations = before.factorizations + bs.numeric_factorizations;
+        s.symbolic_factorizations = before.symbolic_factorizations + bs.symbolic_factorizations;
+        s.min_pivot_ratio = if resumed {
+            bs.min_pivot_ratio.min(before.min_pivot_ratio)
+        } else {
+            bs.min_pivot_ratio
+        };
+        s.wall_time_s = before.wall_time_s + start.elapsed().as_secs_f64();
+        s
+    };
+    // after step k: a checkpoint when due or asked to stop; whether to stop
+    let save = |d: &Dynamics, monitor: &mut dyn Monitor, k: usize| -> Result<bool> {
+        let stop = monitor.stop_requested(k);
+        if stop || monitor.checkpoint_due(k) {
+            let mut c = d.checkpoint(k);
+            c.stats = counted(d);
+            let mut state = d.outcome(Status::Stable);
+            state.stats = c.stats.clone();
+            monitor.checkpoint(&c, &state)?;
+        }
+        Ok(stop)
+    };
     let blocks = tracked(scene, mesh);
     let mut columns = vec!["t".to_string()];
     for &b in &blocks {
@@ -1101,22 +1218,29 @@ pub fn run(
         ]);
         r
     };
-    let dt = d.settings.dt;
-    let steps = (d.settings.duration / dt - 1e-9).ceil().max(1.0) as usize;
+    let steps = step_count(&d.settings);
     let every = scene.output.every.max(1);
     let frames = scene.output.vtk;
-    let r0 = row(&d);
-    monitor.row(&r0)?;
-    history.rows.push(r0);
-    if frames {
-        history.frames.push((0.0, 0));
-        if monitor.wants_frames() {
-            monitor.frame(0, 0.0, &d.outcome(Status::Stable))?;
+    let mut status = Status::Stable;
+    if !resumed {
+        let r0 = row(&d);
+        monitor.row(&r0)?;
+        history.rows.push(r0);
+        if frames {
+            history.frames.push((0.0, 0));
+            if monitor.wants_frames() {
+                monitor.frame(0, 0.0, &d.outcome(Status::Stable))?;
+            }
+        }
+        if save(&d, monitor, 0)? {
+            status = Status::Interrupted { time: d.time };
         }
     }
-    let mut status = Status::Stable;
-    for k in 1..=steps {
-        let target = (k as f64 * dt).min(d.settings.duration.max(dt));
+    for k in first + 1..=steps {
+        if status != Status::Stable {
+            break;
+        }
+        let target = step_time(&d.settings, k);
         let ok = d.advance_to(target)?;
         if !ok {
             status = Status::Failed {
@@ -1137,12 +1261,11 @@ pub fn run(
                 monitor.frame(k, d.time, &d.outcome(Status::Stable))?;
             }
         }
+        if k < steps && save(&d, monitor, k)? {
+            status = Status::Interrupted { time: d.time };
+        }
     }
-    let bs = d.backend.stats().clone();
-    d.stats.factorizations = bs.numeric_factorizations;
-    d.stats.symbolic_factorizations = bs.symbolic_factorizations;
-    d.stats.min_pivot_ratio = bs.min_pivot_ratio;
-    d.stats.wall_time_s = start.elapsed().as_secs_f64();
+    d.stats = counted(&d);
     let mut out = d.outcome(status);
     out.history = Some(history);
     Ok(out)

@@ -1,6 +1,7 @@
 //! Analyses: the static and capacity driver ([`statics`]) and implicit time integration
 //! ([`dynamics`]).
 
+pub mod checkpoint;
 pub mod config;
 pub mod contact_search;
 pub mod curve;
@@ -26,10 +27,15 @@ pub enum Status {
         reason: String,
         blocks: Vec<usize>,
     },
+    /// A dynamic run stopped on request (Ctrl-C) after the step that reached `time` (s);
+    /// its checkpoint lets `dfem run --resume` continue it.
+    Interrupted {
+        time: f64,
+    },
 }
 
 /// Counters written to `summary.json` stats.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Stats {
     pub dofs: usize,
     pub contacts: usize,
@@ -151,9 +157,27 @@ pub fn run_with(
         }
         AnalysisType::Dynamic => dynamics::run(scene, mesh, backend, monitor),
     }?;
+    record_resources(&mut out, backend);
+    Ok(out)
+}
+
+/// Continue a dynamic run from a checkpoint of the same scene ([`dynamics::run_from`]).
+pub fn resume_with(
+    scene: &Scene,
+    mesh: &Mesh,
+    backend: &mut dyn LinearBackend,
+    monitor: &mut dyn dynamics::Monitor,
+    from: checkpoint::Checkpoint,
+) -> Result<Outcome> {
+    let mut out = dynamics::run_from(scene, mesh, backend, monitor, Some(from))?;
+    record_resources(&mut out, backend);
+    Ok(out)
+}
+
+/// The factor size and the peak memory of the process, into the outcome's stats.
+fn record_resources(out: &mut Outcome, backend: &dyn LinearBackend) {
     out.stats.factor_nnz = backend.stats().factor_nnz;
     out.stats.peak_memory_mb = crate::resources::peak_resident_bytes().map(|b| b as f64 / 1e6);
-    Ok(out)
 }
 
 /// The number under `[analysis]` key `k`, `d` when absent; an error naming the key and

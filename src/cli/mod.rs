@@ -8,6 +8,8 @@ use crate::{analysis, mesh, output, scene, solve, Error, Result};
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 #[derive(Parser)]
 #[command(
@@ -30,8 +32,12 @@ enum Command {
         #[arg(long, conflicts_with = "scene")]
         example: Option<String>,
         /// Output directory.
-        #[arg(long)]
-        out: PathBuf,
+        #[arg(long, required_unless_present = "resume", conflicts_with = "resume")]
+        out: Option<PathBuf>,
+        /// Continue the interrupted (Ctrl-C) or killed dynamic run in DIR from its
+        /// checkpoint; the scene is the one it ran (or SCENE, which must be the same).
+        #[arg(long, value_name = "DIR")]
+        resume: Option<PathBuf>,
         /// Worker threads (default: all cores). Results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
@@ -152,11 +158,12 @@ pub fn main() -> ExitCode {
         eprintln!("dfem: internal error ({info}); this is a bug, please report it with the scene that caused it");
     }));
     let cli = Cli::parse();
-    let r = dispatch(cli);
+    let mut code = 0;
+    let r = dispatch(cli, &mut code);
     // every backend is dropped by now: end PETSc/MPI if they were started
     dfem_ffi::finalize();
     match r {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => ExitCode::from(code),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(2)
@@ -212,12 +219,43 @@ fn unknown_example(name: &str) -> Error {
         .fix(format!("use one of: {}", names.join(", ")))
 }
 
-fn dispatch(cli: Cli) -> Result<()> {
+/// Exit status of a dynamic run stopped by Ctrl-C (128 + SIGINT, as shells report it).
+pub const EXIT_INTERRUPTED: u8 = 130;
+
+/// The scene a checkpoint was run with: `given` when there is one (it must be the same),
+/// otherwise the file (or built-in example) the checkpoint names.
+fn resumed_scene(
+    dir: &Path,
+    saved: &crate::analysis::checkpoint::Saved,
+    file: Option<&Path>,
+    example: Option<&str>,
+) -> Result<scene::Scene> {
+    use crate::analysis::checkpoint;
+    let sc = if file.is_some() || example.is_some() {
+        read_scene(file, example)?
+    } else if let Some(name) = saved.source.strip_prefix("example:") {
+        read_scene(None, Some(name))?
+    } else {
+        read_scene(Some(Path::new(&saved.source)), None)?
+    };
+    if checkpoint::fingerprint(&sc) != saved.fingerprint {
+        return Err(Error::new(format!(
+            "the checkpoint belongs to another scene ({}), or the scene was changed since",
+            saved.source
+        ))
+        .file(dir.join(checkpoint::FILE))
+        .fix("resume with the scene as it was run, or run this scene without --resume (into another --out directory to keep these results)"));
+    }
+    Ok(sc)
+}
+
+fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
     match cli.command {
         Command::Run {
             scene: file,
             example,
             out,
+            resume,
             threads: n,
             solver,
             petsc_options,
@@ -238,7 +276,12 @@ fn dispatch(cli: Cli) -> Result<()> {
                 petsc_options: petsc_options.unwrap_or_default(),
             };
             let mut backend = solve::backend_with(&solver, &opts)?;
-            let sc = read_scene(file.as_deref(), example.as_deref())?;
+            let saved = resume.as_deref().map(output::read_checkpoint).transpose()?;
+            let out = out.or(resume).expect("clap requires --out or --resume");
+            let sc = match &saved {
+                Some(s) => resumed_scene(&out, s, file.as_deref(), example.as_deref())?,
+                None => read_scene(file.as_deref(), example.as_deref())?,
+            };
             if !quiet {
                 for w in &sc.warnings {
                     eprintln!("warning: {w}");
@@ -262,8 +305,31 @@ fn dispatch(cli: Cli) -> Result<()> {
                 return Ok(());
             }
             let outcome = if sc.analysis.kind == scene::AnalysisType::Dynamic {
-                let mut w = output::StreamWriter::new(&out, &sc, &m)?;
-                analysis::run_with(&sc, &m, backend.as_mut(), &mut prog, &mut w)
+                let stop = Arc::new(AtomicBool::new(false));
+                let flag = stop.clone();
+                // the first Ctrl-C stops after the step under way, the second at once
+                let _ = ctrlc::set_handler(move || {
+                    if flag.swap(true, Ordering::SeqCst) {
+                        std::process::exit(i32::from(EXIT_INTERRUPTED));
+                    }
+                    eprintln!("\ninterrupted: stopping after this time step (Ctrl-C again to stop at once; the results up to the last checkpoint are kept)");
+                });
+                match saved {
+                    Some(s) => {
+                        let mut w = output::StreamWriter::resuming(&out, &sc, &m, &s.state)?
+                            .stop_on(stop);
+                        analysis::resume_with(&sc, &m, backend.as_mut(), &mut w, s.state).map(
+                            |mut o| {
+                                w.complete(&mut o);
+                                o
+                            },
+                        )
+                    }
+                    None => {
+                        let mut w = output::StreamWriter::new(&out, &sc, &m)?.stop_on(stop);
+                        analysis::run_with(&sc, &m, backend.as_mut(), &mut prog, &mut w)
+                    }
+                }
             } else {
                 analysis::run_with(
                     &sc,
@@ -276,6 +342,10 @@ fn dispatch(cli: Cli) -> Result<()> {
             .map_err(|e| e.in_file(sc.file.as_deref().unwrap_or(Path::new("scene"))))?;
             prog.stage("writing");
             output::write_all(&out, &sc, &m, &outcome)?;
+            if !matches!(outcome.status, analysis::Status::Interrupted { .. }) {
+                // a run that reached its end has nothing to resume
+                let _ = std::fs::remove_file(out.join(analysis::checkpoint::FILE));
+            }
             if !no_plots {
                 prog.stage("figures");
                 output::write_figures(
@@ -309,7 +379,16 @@ fn dispatch(cli: Cli) -> Result<()> {
                     analysis::Status::Failed { reason, .. } => {
                         println!("failed: {reason}; results in {}", out.display())
                     }
+                    analysis::Status::Interrupted { .. } => {}
                 }
+            }
+            if let analysis::Status::Interrupted { time } = outcome.status {
+                // on stderr even with --quiet: the exit status alone does not say how to go on
+                eprintln!(
+                    "interrupted at t = {time} s; the results up to then are in {dir}; continue with: dfem run --resume {dir}",
+                    dir = out.display()
+                );
+                *code = EXIT_INTERRUPTED;
             }
             Ok(())
         }

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use rstar::{RTree, RTreeObject, AABB};
 
 /// A stretch of boundary shared by two blocks.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointSegment {
     /// Block indices, `a < b`.
     pub a: usize,

@@ -50,7 +50,7 @@ pub fn young_poisson(lambda: f64, mu: f64) -> (f64, f64) {
 }
 
 /// State of a contact (METHOD.md §3).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum ContactState {
     Stick,
     Slip,

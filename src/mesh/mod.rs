@@ -16,7 +16,7 @@ use crate::scene::{BlockKind, Scene, Support};
 use dfem_kernels::CONSTRAINED;
 
 /// How a block's nodes are tied to the unknowns.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum BlockDofs {
     /// No unknowns: the block does not move (or moves as prescribed).
     Fixed,
@@ -27,7 +27,7 @@ pub enum BlockDofs {
 }
 
 /// A block in the mesh.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct MeshBlock {
     /// Boundary nodes, counter-clockwise (corners and contact nodes).
     pub boundary: Vec<u32>,
@@ -42,7 +42,7 @@ pub struct MeshBlock {
 }
 
 /// A node-to-node contact element (METHOD.md section 3).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Contact {
     /// Node `l` on block `block_l`, node `m` on block `block_m`, at the same position.
     pub node_l: u32,
@@ -90,7 +90,7 @@ impl Contact {
 }
 
 /// The mesh of a scene.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Mesh {
     /// Node positions (m).
     pub nodes: Vec<Point>,

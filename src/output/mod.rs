@@ -7,6 +7,7 @@ pub mod plot;
 pub mod read;
 pub mod vtk;
 
+use crate::analysis::checkpoint::{self, Checkpoint};
 use crate::analysis::dynamics::{History, Monitor};
 use crate::analysis::{outcome_motion, Outcome, Status};
 use crate::mesh::{BlockDofs, Mesh};
@@ -14,6 +15,17 @@ use crate::scene::{AnalysisType, Scene};
 use crate::{Error, Result};
 use serde_json::{json, Value};
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Wall time (s) between the checkpoints of a dynamic run without `[output]
+/// checkpoint_every`.
+pub const CHECKPOINT_SECONDS: u64 = 30;
+
+/// Environment variable that stops a dynamic run after the step it names, as Ctrl-C
+/// would (for tests of the interruption).
+pub const STOP_AFTER_STEP: &str = "DFEM_STOP_AFTER_STEP";
 
 /// Write `bytes` to `path` atomically (temporary file + rename).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
@@ -57,6 +69,13 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             Value::Null,
             Value::Null,
         ),
+        Status::Interrupted { time } => (
+            "interrupted",
+            Value::Null,
+            Value::String(format!(
+                "interrupted at t = {time} s; the results up to then are written; continue with `dfem run --resume DIR`"
+            )),
+        ),
         Status::Failed { reason, .. } => (
             "failed",
             match &out.mechanism {
@@ -75,6 +94,10 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
         "analysis": match scene.analysis.kind { AnalysisType::Static => "static", AnalysisType::Capacity => "capacity", AnalysisType::Dynamic => "dynamic" },
         "status": status,
         "message": message,
+        "time": match &out.status {
+            Status::Interrupted { time } => Some(*time),
+            _ => out.history.as_ref().and_then(|h| h.rows.last()).map(|r| r[0]),
+        },
         "load_factor": out.load_factor,
         "failure": failure,
         "blocks": blocks,
@@ -174,29 +197,145 @@ fn history_line(r: &[f64]) -> String {
     s
 }
 
-/// Streams a dynamic run to `dir` as it goes: history.csv grows by one flushed line per
-/// time step (so an interrupted run keeps its completed steps; [`write_all`] rewrites
-/// it atomically at the end) and a ParaView frame is written every `[output] every`
-/// steps.
+/// Streams a dynamic run to `dir` as it goes: history.csv grows by one line per time step,
+/// each written by a single unbuffered write (so a run killed at any moment leaves whole
+/// rows; [`write_all`] rewrites it atomically at the end); a ParaView frame is written
+/// every `[output] every` steps (each .vtu atomically, then the .pvd that lists it); a
+/// checkpoint ([`checkpoint::FILE`]) and a summary with status "running" at the start and
+/// then every `[output] checkpoint_every` steps (default every [`CHECKPOINT_SECONDS`] s).
 pub struct StreamWriter<'a> {
     dir: std::path::PathBuf,
     scene: &'a Scene,
     mesh: &'a Mesh,
     file: Option<std::fs::File>,
     frames: Vec<(f64, usize)>,
+    /// Where the scene came from and its fingerprint, stored with each checkpoint.
+    source: String,
+    fingerprint: u64,
+    last_checkpoint: Instant,
+    /// Set on Ctrl-C: stop after the step under way.
+    stop: Arc<AtomicBool>,
+    /// [`STOP_AFTER_STEP`].
+    stop_after: Option<usize>,
+    /// Resuming: the run before its checkpoint.
+    resumed: Option<Before>,
+}
+
+/// The history rows and the frames (time s, step) of a run before its checkpoint.
+struct Before {
+    rows: Vec<Vec<f64>>,
+    frames: Vec<(f64, usize)>,
+}
+
+/// Where a scene came from, as a checkpoint records it: the absolute path of its file, or
+/// `example:NAME`.
+fn scene_source(scene: &Scene) -> String {
+    match &scene.file {
+        Some(f) => std::fs::canonicalize(f)
+            .unwrap_or_else(|_| f.clone())
+            .to_string_lossy()
+            .into_owned(),
+        None => String::new(),
+    }
+}
+
+/// The checkpoint in `dir`; a clear error when there is none.
+pub fn read_checkpoint(dir: &Path) -> Result<checkpoint::Saved> {
+    let path = dir.join(checkpoint::FILE);
+    let bytes = std::fs::read(&path).map_err(|e| {
+        Error::new(format!("no checkpoint to resume from ({e})"))
+            .file(&path)
+            .fix("--resume continues a dynamic run that was interrupted (Ctrl-C) or killed in DIR; a run that completed or failed leaves none: run the scene again without --resume")
+    })?;
+    checkpoint::decode(&bytes, &path)
 }
 
 impl<'a> StreamWriter<'a> {
     pub fn new(dir: &Path, scene: &'a Scene, mesh: &'a Mesh) -> Result<Self> {
         create_dir(dir)?;
+        let stop_after = std::env::var(STOP_AFTER_STEP)
+            .ok()
+            .and_then(|s| s.trim().parse().ok());
         Ok(StreamWriter {
             dir: dir.to_path_buf(),
             scene,
             mesh,
             file: None,
             frames: Vec::new(),
+            source: scene_source(scene),
+            fingerprint: checkpoint::fingerprint(scene),
+            last_checkpoint: Instant::now(),
+            stop: Arc::new(AtomicBool::new(false)),
+            stop_after,
+            resumed: None,
         })
     }
+
+    /// Stop after the step under way when `flag` is set (by a Ctrl-C handler).
+    pub fn stop_on(mut self, flag: Arc<AtomicBool>) -> Self {
+        self.stop = flag;
+        self
+    }
+
+    /// A writer that continues the results in `dir` from checkpoint `c` of this scene:
+    /// history.csv is cut after the checkpoint's row (the rows a killed run wrote after
+    /// it are computed again) and the frames up to it are kept.
+    pub fn resuming(dir: &Path, scene: &'a Scene, mesh: &'a Mesh, c: &Checkpoint) -> Result<Self> {
+        let mut w = Self::new(dir, scene, mesh)?;
+        let path = dir.join("history.csv");
+        let text = std::fs::read_to_string(&path).map_err(|e| w.io(e))?;
+        let mut lines = text.lines();
+        let header = lines.next().unwrap_or_default().to_string();
+        let rows: Vec<Vec<f64>> = lines
+            .take(c.step + 1)
+            .map(|l| {
+                l.split(',')
+                    .map(|v| v.parse().unwrap_or(f64::NAN))
+                    .collect()
+            })
+            .collect();
+        let width = header.split(',').count();
+        if rows.len() != c.step + 1 || rows.iter().any(|r| r.len() != width) {
+            return Err(Error::new(format!(
+                "history.csv holds {} whole rows, fewer than the {} of the checkpoint",
+                rows.iter().filter(|r| r.len() == width).count(),
+                c.step + 1
+            ))
+            .file(&path)
+            .fix("the results in DIR do not belong to its checkpoint: run the scene again without --resume"));
+        }
+        let mut kept = header;
+        kept.push('\n');
+        for r in &rows {
+            kept.push_str(&history_line(r));
+        }
+        write_atomic(&path, kept.as_bytes())?;
+        let settings = crate::analysis::dynamics::Settings::from_scene(scene)?;
+        let every = scene.output.every.max(1);
+        if !c.step.is_multiple_of(every) {
+            // the final state an interrupted run wrote between two frames
+            for part in ["blocks", "contacts"] {
+                let _ = std::fs::remove_file(dir.join(format!("{part}_{:04}.vtu", c.step)));
+            }
+        }
+        let frames: Vec<(f64, usize)> = (0..=c.step)
+            .filter(|k| k.is_multiple_of(every) && dir.join(format!("blocks_{k:04}.vtu")).exists())
+            .map(|k| (crate::analysis::dynamics::step_time(&settings, k), k))
+            .collect();
+        w.frames = frames.clone();
+        w.resumed = Some(Before { rows, frames });
+        Ok(w)
+    }
+
+    /// Put the history rows and frames of the run before the checkpoint in front of the
+    /// outcome's (which holds those after it).
+    pub fn complete(&self, out: &mut Outcome) {
+        if let (Some(b), Some(h)) = (&self.resumed, out.history.as_mut()) {
+            h.rows.splice(0..0, b.rows.iter().cloned());
+            h.frames.splice(0..0, b.frames.iter().copied());
+        }
+    }
+
     fn io(&self, e: std::io::Error) -> Error {
         Error::new(format!("cannot write the history: {e}"))
             .file(self.dir.join("history.csv"))
@@ -207,7 +346,16 @@ impl<'a> StreamWriter<'a> {
 impl Monitor for StreamWriter<'_> {
     fn start(&mut self, columns: &[String]) -> Result<()> {
         use std::io::Write;
-        let mut f = std::fs::File::create(self.dir.join("history.csv")).map_err(|e| self.io(e))?;
+        let path = self.dir.join("history.csv");
+        if self.resumed.is_some() {
+            let f = std::fs::OpenOptions::new()
+                .append(true)
+                .open(&path)
+                .map_err(|e| self.io(e))?;
+            self.file = Some(f);
+            return Ok(());
+        }
+        let mut f = std::fs::File::create(&path).map_err(|e| self.io(e))?;
         writeln!(f, "{}", columns.join(",")).map_err(|e| self.io(e))?;
         self.file = Some(f);
         Ok(())
@@ -216,11 +364,36 @@ impl Monitor for StreamWriter<'_> {
         use std::io::Write;
         let line = history_line(row);
         if let Some(f) = self.file.as_mut() {
-            let r = f.write_all(line.as_bytes()).and_then(|_| f.flush());
+            // one write of the whole line: a killed run leaves whole rows
+            let r = f.write_all(line.as_bytes());
             if let Err(e) = r {
                 return Err(self.io(e));
             }
         }
+        Ok(())
+    }
+    fn stop_requested(&mut self, step: usize) -> bool {
+        self.stop.load(Ordering::SeqCst) || self.stop_after == Some(step)
+    }
+    fn checkpoint_due(&mut self, step: usize) -> bool {
+        step == 0
+            || match self.scene.output.checkpoint_every {
+                Some(n) => step.is_multiple_of(n),
+                None => self.last_checkpoint.elapsed() >= Duration::from_secs(CHECKPOINT_SECONDS),
+            }
+    }
+    fn checkpoint(&mut self, c: &Checkpoint, state: &Outcome) -> Result<()> {
+        let bytes = checkpoint::encode(&self.source, self.fingerprint, c);
+        write_atomic(&self.dir.join(checkpoint::FILE), &bytes)?;
+        let mut s = summary(self.scene, self.mesh, state);
+        s["status"] = json!("running");
+        s["time"] = json!(c.time);
+        s["message"] = json!(format!(
+            "running, or killed: the results reach t = {} s at the last checkpoint; a run that no longer runs continues with `dfem run --resume DIR`",
+            c.time
+        ));
+        write_summary(&self.dir, &s)?;
+        self.last_checkpoint = Instant::now();
         Ok(())
     }
     fn wants_frames(&self) -> bool {
@@ -246,15 +419,20 @@ pub fn write_all(dir: &Path, scene: &Scene, mesh: &Mesh, out: &Outcome) -> Resul
         Some(h) => {
             write_atomic(&dir.join("history.csv"), history_csv(h).as_bytes())?;
             if scene.output.vtk {
-                // the frames a monitor wrote, and the final state in any case
-                let last = h.frames.last().copied().unwrap_or((0.0, 0));
+                // the frames a monitor wrote, and the final state in any case (at the
+                // step it reached: a failed or interrupted run may end between frames)
+                let last = match h.rows.last() {
+                    Some(r) => (r[0], h.rows.len() - 1),
+                    None => h.frames.last().copied().unwrap_or((0.0, 0)),
+                };
                 vtk::write_step(dir, last.1, last.0, scene, mesh, out)?;
-                let written: Vec<(f64, usize)> = h
+                let mut written: Vec<(f64, usize)> = h
                     .frames
                     .iter()
                     .copied()
-                    .filter(|f| *f == last || dir.join(format!("blocks_{:04}.vtu", f.1)).exists())
+                    .filter(|f| f.1 < last.1 && dir.join(format!("blocks_{:04}.vtu", f.1)).exists())
                     .collect();
+                written.push(last);
                 vtk::write_pvd(dir, &written)?;
             }
         }
@@ -262,8 +440,11 @@ pub fn write_all(dir: &Path, scene: &Scene, mesh: &Mesh, out: &Outcome) -> Resul
     if let Some(c) = &out.capacity_curve {
         write_atomic(&dir.join("curve.csv"), curve_csv(c).as_bytes())?;
     }
-    let mut text =
-        serde_json::to_string_pretty(&summary(scene, mesh, out)).expect("JSON of plain values");
+    write_summary(dir, &summary(scene, mesh, out))
+}
+
+fn write_summary(dir: &Path, s: &Value) -> Result<()> {
+    let mut text = serde_json::to_string_pretty(s).expect("JSON of plain values");
     text.push('\n');
     write_atomic(&dir.join("summary.json"), text.as_bytes())
 }

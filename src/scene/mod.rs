@@ -167,6 +167,10 @@ pub struct Output {
     pub vtk: bool,
     /// Dynamic: a ParaView frame every this many time steps (default 1).
     pub every: usize,
+    /// Dynamic: a checkpoint (`checkpoint.bin`, for `dfem run --resume`) every this many
+    /// time steps; `None` (default): every [`crate::output::CHECKPOINT_SECONDS`] s of
+    /// wall time.
+    pub checkpoint_every: Option<usize>,
 }
 
 /// A validated scene.

@@ -116,6 +116,7 @@ struct RawOutput {
     track: Option<Vec<String>>,
     vtk: Option<bool>,
     every: Option<i64>,
+    checkpoint_every: Option<i64>,
 }
 
 /// Keys of `[analysis]` (the drivers of later analysis types read the rest from `extra`).
@@ -853,6 +854,7 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
             track: vec![],
             vtk: true,
             every: 1,
+            checkpoint_every: None,
         },
         Some(o) => {
             let at = o.span().start;
@@ -877,10 +879,22 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
                     "for example every = 10 (a ParaView frame every 10 time steps)",
                 ));
             }
+            let checkpoint_every = match o.checkpoint_every {
+                Some(n) if n < 1 => {
+                    return Err(err_at(
+                        src.key_line(at, "checkpoint_every"),
+                        "[output] key 'checkpoint_every'",
+                        format!("checkpoint_every must be a whole number of steps ≥ 1, not {n}"),
+                        "for example checkpoint_every = 100 (a checkpoint every 100 time steps), or leave it out for one every 30 s of wall time",
+                    ));
+                }
+                n => n.map(|n| n as usize),
+            };
             Output {
                 track,
                 vtk: o.vtk.unwrap_or(true),
                 every: every as usize,
+                checkpoint_every,
             }
         }
     };

@@ -253,7 +253,8 @@ impl LocalRows {
 /// given block size 2. Rigid blocks (3 unknowns) or constrained components break it.
 fn node_pairs(pattern: &CsrPattern) -> bool {
     let n = pattern.n();
-    n.is_multiple_of(2) && (0..n / 2).all(|k| pattern.row_cols(2 * k) == pattern.row_cols(2 * k + 1))
+    n.is_multiple_of(2)
+        && (0..n / 2).all(|k| pattern.row_cols(2 * k) == pattern.row_cols(2 * k + 1))
 }
 
 /// The PETSc backend; see the module documentation.

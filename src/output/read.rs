@@ -2,6 +2,7 @@
 //! `curve.csv`, for `dfem plot DIR`. Only the subset of VTK XML that dfem writes is read:
 //! `<DataArray ... Name="..." ...>values</DataArray>` with ASCII values.
 
+use crate::analysis::dynamics::History;
 use crate::{Error, Result};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -163,11 +164,7 @@ pub fn summary(dir: &Path) -> Result<serde_json::Value> {
 
 /// Read the numeric CSV file `DIR/name` if it exists: its header's column names and its
 /// rows, each with at least `min_cols` values (a damaged file is an error).
-fn numeric_csv(
-    dir: &Path,
-    name: &str,
-    min_cols: usize,
-) -> Result<Option<(Vec<String>, Vec<Vec<f64>>)>> {
+fn numeric_csv(dir: &Path, name: &str, min_cols: usize) -> Result<Option<History>> {
     let path = dir.join(name);
     if !path.is_file() {
         return Ok(None);
@@ -198,24 +195,22 @@ fn numeric_csv(
         }
         rows.push(v);
     }
-    Ok(Some((header, rows)))
+    Ok(Some(History {
+        columns: header,
+        rows,
+        frames: vec![],
+    }))
 }
 
 /// Read `DIR/curve.csv` (header `load_factor,ux_m,uy_m`) if it exists: (λ, ux, uy) rows.
 pub fn curve(dir: &Path) -> Result<Option<Vec<[f64; 3]>>> {
     Ok(numeric_csv(dir, "curve.csv", 3)?
-        .map(|(_, rows)| rows.iter().map(|v| [v[0], v[1], v[2]]).collect()))
+        .map(|h| h.rows.iter().map(|v| [v[0], v[1], v[2]]).collect()))
 }
 
 /// Read `DIR/history.csv` (a dynamic run's, docs/outputs.md) if it exists.
-pub fn history(dir: &Path) -> Result<Option<crate::analysis::dynamics::History>> {
-    Ok(numeric_csv(dir, "history.csv", 1)?.map(|(columns, rows)| {
-        crate::analysis::dynamics::History {
-            columns,
-            rows,
-            frames: vec![],
-        }
-    }))
+pub fn history(dir: &Path) -> Result<Option<History>> {
+    numeric_csv(dir, "history.csv", 1)
 }
 
 #[cfg(test)]

@@ -426,7 +426,8 @@ duration = {duration}
 /// downward step). At the impact the angular velocity drops; Housner (1963) gives the
 /// ratio 1 − (3/2) sin²α for a rigid plastic impact (α = atan(b/d)). Here the impact is
 /// resolved by the penalty contacts and the numerical dissipation of generalized-α
-/// (ρ∞ = 0) over a few steps, so only a loose 10 % is asked (measured: −7.5 %).
+/// (ρ∞ = 0) over a few steps; measured from the rocking amplitudes before and after
+/// the impact, within 5 %.
 #[test]
 fn rocking_block_lands_back_on_its_heel() {
     let dt = 0.002;
@@ -445,7 +446,7 @@ vertices = [[0.0, 0.0], [0.5, 0.0], [0.5, 2.0], [0.0, 2.0]]
 [analysis]
 type = "dynamic"
 dt = {dt}
-duration = 2.0
+duration = 2.4
 integrator = "generalized-alpha"
 rho_inf = 0.0
 ground_motion = {{ expression = "0.5*step(0.25-t)", units = "g" }}
@@ -461,22 +462,45 @@ ground_motion = {{ expression = "0.5*step(0.25-t)", units = "g" }}
     let k = (1..th.len())
         .find(|&k| t[k] > 0.3 && th[k - 1] * th[k] < 0.0)
         .expect("the block must fall back onto its heel");
-    // angular velocities just before and a few steps after the impact
-    let w = |i: usize| (th[i] - th[i - 1]) / dt;
-    let before = w(k - 1);
-    let after = w(k + 5);
-    let ratio = after / before;
+    // the next return, or the end of the run
+    let k2 = (k + 1..th.len())
+        .find(|&j| th[j - 1] * th[j] < 0.0)
+        .unwrap_or(th.len());
+    // The angular velocity at the impact, before and after, from the amplitudes on
+    // either side: a rigid rectangle rocking about a corner (I_O = 4/3 m R², R the
+    // half-diagonal) keeps ½ I_O θ̇² + m g R cos(α − |θ|) between impacts, so
+    // θ̇² at θ = 0 is (3g/2R)(cos(α − θ_peak) − cos α). (A finite difference of θ a few
+    // steps on each side, as this test first measured, also counts gravity's
+    // deceleration of the new rotation over those steps, ≈ p² sin α × 0.01 s ≈ 3 % of
+    // θ̇: it measured −7.5 %.)
+    let p0 = th[..k].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let p1 = th[k..k2].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    // the amplitude after the impact is reached within the run (not cut by its end)
+    assert!(
+        th[k2 - 1].abs() < p1,
+        "the run ends before the amplitude after the impact"
+    );
+    let drop = |p: f64| (alpha - p).cos() - alpha.cos();
+    let ratio = (drop(p1) / drop(p0)).sqrt();
     let housner = 1.0 - 1.5 * alpha.sin().powi(2);
     eprintln!(
-        "rocking: peak {peak:.4} rad, lands at t = {:.3} s, θ̇ {before:.4} → {after:.4} rad/s, ratio {ratio:.4} (Housner {housner:.4}, {:+.1} %)",
+        "rocking: peak {p0:.4} rad, lands at t = {:.3} s, rocks on to {p1:.4} rad: θ̇ ratio {ratio:.4} (Housner {housner:.4}, {:+.1} %)",
         t[k],
         100.0 * (ratio / housner - 1.0)
     );
+    // after the impact it rocks on the other corner, the opposite way
+    let after = th[k..k2]
+        .iter()
+        .fold(0.0f64, |m, x| if x.abs() > m.abs() { *x } else { m });
     assert!(
-        before < 0.0 && after < 0.0,
+        th[k - 1] > 0.0 && after < 0.0,
         "it rocks on, onto the other corner"
     );
-    assert!((ratio / housner - 1.0).abs() < 0.10, "{ratio} vs {housner}");
+    // Housner's ratio assumes an instantaneous impact about the new corner; here the
+    // penalty band spreads it over a few steps and generalized-α (ρ∞ = 0) damps the
+    // contact's stiff modes: 5 % (the tolerance; measured −0.7 % with Δt = 2 ms,
+    // 0.0 % with 0.5 ms; the second impact, −0.1 %)
+    assert!((ratio / housner - 1.0).abs() < 0.05, "{ratio} vs {housner}");
 }
 
 /// `dfem run` on the built-in dynamic example: history.csv (INTERFACE.md header), frames

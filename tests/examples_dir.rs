@@ -13,7 +13,8 @@
 //! the failure have that motion), `block` with `displacement` = [low, high] (the norm of
 //! its displacement, m) and `rotation` = [low, high] (rad), `max_displacement` (m, every
 //! free block). The figure the README shows, `examples/DIR/FILE.png`, must exist;
-//! `DFEM_WRITE_FIGURES=1` copies the run's `figures/deformed.png` there.
+//! `DFEM_WRITE_FIGURES=1` copies the run's `figures/deformed.png` there (and, for a
+//! dynamic run, `figures/history.png` to `FILE_history.png` where the README has one).
 
 mod common;
 use serde_json::Value;
@@ -187,6 +188,15 @@ fn every_example_reproduces_its_readme() {
                 nonempty(&figs.join("capacity_curve.png"), 10_000);
             }
             let stem = scene.trim_end_matches(".toml");
+            // dynamic runs draw their displacement histories; a README may show them as
+            // STEM_history.png, refreshed with the deformed figure
+            if s["analysis"] == "dynamic" {
+                nonempty(&figs.join("history.png"), 10_000);
+                let shown = dir.join(format!("{stem}_history.png"));
+                if std::env::var_os("DFEM_WRITE_FIGURES").is_some() && shown.exists() {
+                    std::fs::copy(figs.join("history.png"), &shown).unwrap();
+                }
+            }
             let shown = dir.join(format!("{stem}.png"));
             if std::env::var_os("DFEM_WRITE_FIGURES").is_some() {
                 std::fs::copy(figs.join("deformed.png"), &shown).unwrap();

@@ -71,11 +71,25 @@ fn every_example_draws_its_figures_and_plot_redraws_them() {
         assert!(svg.contains("|u| (m)"), "{name}: colour bar");
         // static examples draw no capacity curve
         assert!(!figs.join("capacity_curve.png").exists(), "{name}");
+        // dynamic ones draw the displacement histories (history.csv), static ones none
+        let dynamic = text.contains("type = \"dynamic\"");
+        assert_eq!(figs.join("history.png").exists(), dynamic, "{name}");
+        if dynamic {
+            check_png(&figs.join("history.png"), 10);
+            let svg = read_svg(&figs.join("history.svg"));
+            assert!(svg.contains("ux, m") && svg.contains("uy, m"), "{name}");
+            assert!(svg.contains("<polyline"), "{name}: no curve drawn");
+        }
         // `dfem plot` reads the files back and draws the same figures
         let again = dir.join("again");
         let out = dfem(&["plot", d, "--out", again.to_str().unwrap()]);
         ok(&out, name);
-        for f in ["deformed.png", "deformed.svg"] {
+        let redrawn: &[&str] = if dynamic {
+            &["deformed.png", "deformed.svg", "history.png", "history.svg"]
+        } else {
+            &["deformed.png", "deformed.svg"]
+        };
+        for f in redrawn {
             assert!(
                 std::fs::read(figs.join(f)).unwrap() == std::fs::read(again.join(f)).unwrap(),
                 "{name}: {f} differs when redrawn from the files"

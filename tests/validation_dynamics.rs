@@ -7,6 +7,11 @@
 //!   here (two-way sliding, Newmark 1965's model, time step 10⁻⁴ s).
 //! * A slender block (b/d = 0.25) under a ground-acceleration ramp starts rocking when the
 //!   acceleration passes g b/d (Housner 1963): its heel contact opens within one step.
+//! * A free-rocking block loses, at its impact, the angular velocity Housner's
+//!   1 − (3/2) sin²α predicts (from the amplitudes on either side, within 5 %).
+//! * The seed's arch on piers (§4.3): pseudo-dynamic (`inertia = false`) it fails just
+//!   past the collapse load factor of the static capacity driver; with inertia it
+//!   collapses and the run goes on.
 //! * The energy audit closes to 1 % of the external work in the sliding and rocking runs.
 //! * A block put on its base without contact force: Newmark's average acceleration keeps
 //!   the contact's chatter, HHT-α damps it.
@@ -426,7 +431,8 @@ duration = {duration}
 /// downward step). At the impact the angular velocity drops; Housner (1963) gives the
 /// ratio 1 − (3/2) sin²α for a rigid plastic impact (α = atan(b/d)). Here the impact is
 /// resolved by the penalty contacts and the numerical dissipation of generalized-α
-/// (ρ∞ = 0) over a few steps, so only a loose 10 % is asked (measured: −7.5 %).
+/// (ρ∞ = 0) over a few steps; measured from the rocking amplitudes before and after
+/// the impact, within 5 %.
 #[test]
 fn rocking_block_lands_back_on_its_heel() {
     let dt = 0.002;
@@ -445,7 +451,7 @@ vertices = [[0.0, 0.0], [0.5, 0.0], [0.5, 2.0], [0.0, 2.0]]
 [analysis]
 type = "dynamic"
 dt = {dt}
-duration = 2.0
+duration = 2.4
 integrator = "generalized-alpha"
 rho_inf = 0.0
 ground_motion = {{ expression = "0.5*step(0.25-t)", units = "g" }}
@@ -461,22 +467,45 @@ ground_motion = {{ expression = "0.5*step(0.25-t)", units = "g" }}
     let k = (1..th.len())
         .find(|&k| t[k] > 0.3 && th[k - 1] * th[k] < 0.0)
         .expect("the block must fall back onto its heel");
-    // angular velocities just before and a few steps after the impact
-    let w = |i: usize| (th[i] - th[i - 1]) / dt;
-    let before = w(k - 1);
-    let after = w(k + 5);
-    let ratio = after / before;
+    // the next return, or the end of the run
+    let k2 = (k + 1..th.len())
+        .find(|&j| th[j - 1] * th[j] < 0.0)
+        .unwrap_or(th.len());
+    // The angular velocity at the impact, before and after, from the amplitudes on
+    // either side: a rigid rectangle rocking about a corner (I_O = 4/3 m R², R the
+    // half-diagonal) keeps ½ I_O θ̇² + m g R cos(α − |θ|) between impacts, so
+    // θ̇² at θ = 0 is (3g/2R)(cos(α − θ_peak) − cos α). (A finite difference of θ a few
+    // steps on each side, as this test first measured, also counts gravity's
+    // deceleration of the new rotation over those steps, ≈ p² sin α × 0.01 s ≈ 3 % of
+    // θ̇: it measured −7.5 %.)
+    let p0 = th[..k].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let p1 = th[k..k2].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    // the amplitude after the impact is reached within the run (not cut by its end)
+    assert!(
+        th[k2 - 1].abs() < p1,
+        "the run ends before the amplitude after the impact"
+    );
+    let drop = |p: f64| (alpha - p).cos() - alpha.cos();
+    let ratio = (drop(p1) / drop(p0)).sqrt();
     let housner = 1.0 - 1.5 * alpha.sin().powi(2);
     eprintln!(
-        "rocking: peak {peak:.4} rad, lands at t = {:.3} s, θ̇ {before:.4} → {after:.4} rad/s, ratio {ratio:.4} (Housner {housner:.4}, {:+.1} %)",
+        "rocking: peak {p0:.4} rad, lands at t = {:.3} s, rocks on to {p1:.4} rad: θ̇ ratio {ratio:.4} (Housner {housner:.4}, {:+.1} %)",
         t[k],
         100.0 * (ratio / housner - 1.0)
     );
+    // after the impact it rocks on the other corner, the opposite way
+    let after = th[k..k2]
+        .iter()
+        .fold(0.0f64, |m, x| if x.abs() > m.abs() { *x } else { m });
     assert!(
-        before < 0.0 && after < 0.0,
+        th[k - 1] > 0.0 && after < 0.0,
         "it rocks on, onto the other corner"
     );
-    assert!((ratio / housner - 1.0).abs() < 0.10, "{ratio} vs {housner}");
+    // Housner's ratio assumes an instantaneous impact about the new corner; here the
+    // penalty band spreads it over a few steps and generalized-α (ρ∞ = 0) damps the
+    // contact's stiff modes: 5 % (the tolerance; measured −0.7 % with Δt = 2 ms,
+    // 0.0 % with 0.5 ms; the second impact, −0.1 %)
+    assert!((ratio / housner - 1.0).abs() < 0.05, "{ratio} vs {housner}");
 }
 
 /// `dfem run` on the built-in dynamic example: history.csv (INTERFACE.md header), frames
@@ -689,4 +718,76 @@ rho_inf = 0.0
         out.stats.symbolic_factorizations,
         out.stats.contact_topologies
     );
+}
+
+/// The seed's arch on piers (its §4.3, Table 2; `examples/seed_arch/`).
+fn seed_arch(name: &str) -> String {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    std::fs::read_to_string(root.join("examples/seed_arch").join(name)).unwrap()
+}
+
+/// The seed's Acc. No. 1 (ω = 1 rad/s) and No. 2 (ω = 3 rad/s), in g.
+fn seed_acc(t: f64, omega: f64) -> f64 {
+    0.8 * t * (-0.5 * t).exp() * (omega * t).sin()
+}
+
+/// Pseudo-dynamic (`inertia = false`, seed §4.3): the arch under Acc. No. 1 and No. 2
+/// ends as a mechanism once the ground acceleration passes the arch's collapse load
+/// factor λ_c, computed independently by the static capacity driver on the same scene
+/// (the lateral body force λ W raised until no equilibrium). It cannot fail below λ_c (a
+/// balanced state exists, which the Kelvin–Voigt system relaxes to), and the dashpots
+/// (relaxation time Eₙ*/Eₙ = 0.1 s) carry part of the load while it rises, so it fails a
+/// little above: at the last whole step, measured 1.02 λ_c (Acc. 1, t = 0.6 s) and
+/// 1.25 λ_c (Acc. 2, t = 0.4 s, a faster rise); asked within
+/// [λ_c, 1.6 λ_c]. Up to then the displacements stay small beside the blocks (below 2 cm,
+/// gravity's settlement of the crown, 6.1 mm, included), as the seed's Fig. 6b reports.
+#[test]
+fn pseudo_dynamic_arch_fails_past_its_static_collapse_load() {
+    let text = seed_arch("acc1.toml");
+    let cap =
+        text.split("[analysis]").next().unwrap().to_string() + "[analysis]\ntype = \"capacity\"\n";
+    let (_, out) = common::solve(&common::scene(&cap));
+    let lc = out.load_factor.expect("a capacity run gives λ");
+    assert!(lc > 0.1 && lc < 0.3, "λ_c = {lc}");
+    let mut fail_at = vec![];
+    for (file, omega) in [("acc1.toml", 1.0), ("acc2.toml", 3.0)] {
+        let (_, out) = common::solve(&common::scene(&seed_arch(file)));
+        assert!(
+            matches!(out.status, Status::Failed { .. }),
+            "{file}: {:?}",
+            out.status
+        );
+        let h = out.history.expect("history");
+        let t = *col(&h, "t").last().unwrap();
+        let a = seed_acc(t, omega);
+        eprintln!(
+            "{file}: last converged t = {t:.4} s, a_g = {a:.4} g = {:.3} λ_c (λ_c = {lc:.4})",
+            a / lc
+        );
+        assert!(
+            a >= lc && a <= 1.6 * lc,
+            "{file}: a_g(t) = {a} g, λ_c = {lc}"
+        );
+        let umax = out
+            .node_disp
+            .iter()
+            .map(|d| d[0].hypot(d[1]))
+            .fold(0.0, f64::max);
+        assert!(umax < 0.02, "{file}: |u| = {umax} m");
+        fail_at.push(t);
+    }
+    // Acc. No. 2 rises faster (0.8 t e^(−t/2) sin 3t): it reaches λ_c first
+    assert!(fail_at[1] < fail_at[0], "{fail_at:?}");
+}
+
+/// With inertia, the seed's arch under Acc. No. 1 (HHT-α, Δt = 0.01 s, 2 s; the example
+/// `examples/seed_arch/acc1_inertia.toml`) runs through its collapse: the crown block
+/// falls by more than a metre (a result, not an error).
+#[test]
+fn arch_with_inertia_collapses_under_acc_1() {
+    let (_, out) = common::solve(&common::scene(&seed_arch("acc1_inertia.toml")));
+    assert_eq!(out.status, Status::Stable, "{:?}", out.status);
+    let h = out.history.expect("history");
+    let uy = *col(&h, "v7.uy").last().unwrap();
+    assert!(uy < -1.0, "crown uy = {uy}");
 }

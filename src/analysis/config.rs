@@ -3,7 +3,7 @@
 //! rotation of any size produces no strain, and contact forces returned to the strength
 //! envelope by the contact law.
 
-use crate::assembly::{contact_gradient, cst_b, System};
+use crate::assembly::{cst_b, System};
 use crate::geometry::polygon::{sub, Point};
 use crate::material::{ContactLaw, ContactState};
 use crate::mesh::{BlockDofs, Mesh};
@@ -204,22 +204,8 @@ pub fn evaluate(
         }
     }
     for (k, c) in mesh.contacts.iter().enumerate() {
-        let [fnn, fs] = force[k];
-        if fnn == 0.0 && fs == 0.0 {
-            continue;
-        }
-        let (ml, mm) = mesh.contact_maps(c);
-        let gn = contact_gradient(&ml, &mm, c.normal);
-        let gs = contact_gradient(&ml, &mm, [-c.normal[1], c.normal[0]]);
-        for i in 0..ml.len + mm.len {
-            let dof = if i < ml.len {
-                ml.dofs[i]
-            } else {
-                mm.dofs[i - ml.len]
-            };
-            if dof != CONSTRAINED {
-                f_int[dof as usize] += fnn * gn[i] + fs * gs[i];
-            }
+        if force[k] != [0.0, 0.0] {
+            crate::assembly::add_contact_force(&mesh, c, force[k], &mut f_int);
         }
     }
     Trial {

@@ -20,6 +20,13 @@
 //! even when blocks separate, thanks to the mass. The geometry is updated after every
 //! converged step (updated Lagrangian); a step that does not converge is halved.
 //!
+//! `inertia = false` (the seed's pseudo-dynamic analysis, its §4.2 end and §4.3): M is
+//! dropped, C u̇ + F_int(u) = F(t) with F = gravity + loads − M ι a_g(t) (the ground motion
+//! as a body-force history), integrated by backward Euler (v₁ = Δu/h, balance at t₁,
+//! effective matrix C/h + K_s). A step with no solution even when cut means the loads
+//! exceed what the contacts hold: the run ends "failed" (a mechanism), as the seed's
+//! computations end (its §4).
+//!
 //! Damping C: the Kelvin–Voigt viscosities of the blocks (D_v from λ*, μ*) and of the
 //! contacts (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h, both while a contact is closed, sticking
 //! or slipping: the band's dashpots act in parallel with its friction slider, so that the
@@ -65,6 +72,7 @@ pub const KEYS: &[&str] = &[
     "max_cuts",
     "initial",
     "impact_reset",
+    "inertia",
 ];
 
 /// Open/closed changes of a contact within a step after which its normal spring stays
@@ -131,6 +139,10 @@ pub struct Settings {
     /// Recompute the acceleration after a step in which a contact opened or closed
     /// ([`Dynamics::filtered_acceleration`]); `impact_reset = false` turns it off.
     pub reset_on_impact: bool,
+    /// Keep the inertia M ü (default). `inertia = false`: the seed's pseudo-dynamic
+    /// analysis (its §4.2 end, §4.3): C u̇ + F_int(u) = F(t), integrated by backward
+    /// Euler, the ground motion entering only through the body force −M ι a_g(t).
+    pub inertia: bool,
 }
 
 impl Settings {
@@ -184,6 +196,14 @@ impl Settings {
             tolerance: num("tolerance", 1e-6, 1e-14, 0.1)?,
             max_iterations: num("max_iterations", 100.0, 1.0, 1e6)? as usize,
             max_cuts: num("max_cuts", 6.0, 0.0, 30.0)? as usize,
+            inertia: match x.get("inertia") {
+                None => true,
+                Some(v) => v.as_bool().ok_or_else(|| {
+                    Error::new("'inertia' must be true or false")
+                        .place(place("inertia"))
+                        .fix("inertia = true (default: M ü kept) or false (pseudo-dynamic: C u̇ + F_int = F(t))")
+                })?,
+            },
             reset_on_impact: match x.get("impact_reset") {
                 None => true,
                 Some(v) => v.as_bool().ok_or_else(|| {
@@ -448,8 +468,10 @@ impl<'a> Dynamics<'a> {
             d.preload()?;
         }
         let f0 = d.f_ext(0.0);
-        d.a = (0..n).map(|i| (f0[i] - d.f_int[i]) / d.mass[i]).collect();
-        if d.settings.preload {
+        if d.settings.inertia {
+            d.a = (0..n).map(|i| (f0[i] - d.f_int[i]) / d.mass[i]).collect();
+        }
+        if d.settings.preload && d.settings.inertia {
             d.filtered_acceleration();
         }
         Ok(d)
@@ -697,7 +719,13 @@ impl<'a> Dynamics<'a> {
     /// converge (the caller cuts it).
     fn step(&mut self, h: f64) -> Result<Option<Accepted>> {
         let s = self.settings.scheme;
-        let (am, af, beta, gamma) = (s.alpha_m, s.alpha_f, s.beta, s.gamma);
+        let inertia = self.settings.inertia;
+        // without inertia: backward Euler, v₁ = Δu/h, the balance taken at t₁
+        let (am, af, beta, gamma) = if inertia {
+            (s.alpha_m, s.alpha_f, s.beta, s.gamma)
+        } else {
+            (0.0, 0.0, 1.0, 1.0)
+        };
         let [ra0, ra1] = self.settings.rayleigh;
         let n = self.cur.n_dofs;
         let t0 = self.time;
@@ -706,7 +734,7 @@ impl<'a> Dynamics<'a> {
         let fe: Vec<f64> = (0..n)
             .map(|i| self.f_static[i] + (1.0 - af) * fg1[i] + af * fg0[i])
             .collect();
-        let c0 = 1.0 / (beta * h * h);
+        let c0 = if inertia { 1.0 / (beta * h * h) } else { 0.0 };
         let c1 = gamma / (beta * h);
         // start from the committed state (the first solve is the linearized step: a
         // predictor that moves stiff contacts would start far from the answer)
@@ -726,9 +754,13 @@ impl<'a> Dynamics<'a> {
             let a1: Vec<f64> = (0..n)
                 .map(|i| c0 * (dq[i] - h * self.v[i] - h * h * (0.5 - beta) * self.a[i]))
                 .collect();
-            let v1: Vec<f64> = (0..n)
-                .map(|i| self.v[i] + h * ((1.0 - gamma) * self.a[i] + gamma * a1[i]))
-                .collect();
+            let v1: Vec<f64> = if inertia {
+                (0..n)
+                    .map(|i| self.v[i] + h * ((1.0 - gamma) * self.a[i] + gamma * a1[i]))
+                    .collect()
+            } else {
+                dq.iter().map(|d| d / h).collect()
+            };
             // secant stiffness and damping of the trial states, in the trial geometry. A
             // contact that keeps opening and closing within the step sits at the kink of
             // its law (touching with no force: the chatter of a stiff contact), where the
@@ -806,20 +838,24 @@ impl<'a> Dynamics<'a> {
                     *f += x;
                 }
             }
-            let inertia: Vec<f64> = (0..n)
-                .map(|i| self.mass[i] * ((1.0 - am) * a1[i] + am * self.a[i]))
-                .collect();
+            let f_inertia: Vec<f64> = if inertia {
+                (0..n)
+                    .map(|i| self.mass[i] * ((1.0 - am) * a1[i] + am * self.a[i]))
+                    .collect()
+            } else {
+                vec![0.0; n]
+            };
             let r: Vec<f64> = (0..n)
                 .map(|i| {
                     fe[i]
-                        - inertia[i]
+                        - f_inertia[i]
                         - (1.0 - af) * (fv1[i] + trial.f_int[i])
                         - af * (self.f_visc[i] + self.f_int[i])
                 })
                 .collect();
             let rn = norm(&r);
             let scale = norm(&fe)
-                .max(norm(&inertia))
+                .max(norm(&f_inertia))
                 .max(norm(&trial.f_int))
                 .max(1e-300);
             let negligible = self.settings.tolerance * scale;
@@ -949,7 +985,7 @@ impl<'a> Dynamics<'a> {
         }
         // work of the blocks' relative motion on the contacts beyond their elastic energy
         self.energy.contact += contact;
-        self.energy.kinetic = 0.5
+        self.energy.kinetic = if self.settings.inertia { 0.5 } else { 0.0 }
             * (0..v.len())
                 .map(|i| self.mass[i] * v[i] * v[i])
                 .sum::<f64>();
@@ -1003,7 +1039,10 @@ impl<'a> Dynamics<'a> {
                         .zip(&self.committed.state)
                         .any(|(o, s)| *o != (*s == ContactState::Open));
                     let changed = self.update_contacts();
-                    if self.settings.reset_on_impact && (switched || changed) {
+                    if self.settings.reset_on_impact
+                        && self.settings.inertia
+                        && (switched || changed)
+                    {
                         self.filtered_acceleration();
                     }
                     h *= 2.0;
@@ -1244,10 +1283,19 @@ pub fn run_from(
         let ok = d.advance_to(target)?;
         if !ok {
             status = Status::Failed {
-                reason: format!(
-                    "the time step from t = {:.4} s did not converge even when cut to dt/2^{}: the contacts cannot be resolved (try a smaller dt)",
-                    d.time, d.settings.max_cuts
-                ),
+                reason: if d.settings.inertia {
+                    format!(
+                        "the time step from t = {:.4} s did not converge even when cut to dt/2^{}: the contacts cannot be resolved (try a smaller dt)",
+                        d.time, d.settings.max_cuts
+                    )
+                } else {
+                    // without inertia a step has no solution once the loads exceed what
+                    // the contacts can hold: the seed's end of a computation (its §4)
+                    format!(
+                        "at t = {:.4} s the structure became a mechanism: without inertia (pseudo-dynamic, inertia = false) no state after it balances the loads",
+                        d.time
+                    )
+                },
                 blocks: vec![],
             };
             break;

@@ -8,7 +8,7 @@ pub mod loads;
 pub mod mass;
 
 use crate::material::{block_elastic, ContactSprings};
-use crate::mesh::{Mesh, PointMap};
+use crate::mesh::{Contact, Mesh, PointMap};
 
 use crate::geometry::polygon::Point;
 use crate::scene::Scene;
@@ -217,6 +217,30 @@ pub fn contact_gradient(ml: &PointMap, mm: &PointMap, dir: Point) -> [f64; 12] {
         *x = dir[0] * mm.g[0][k] + dir[1] * mm.g[1][k];
     }
     g
+}
+
+/// Call `f(dof, gₙ, gₛ)` for each free unknown of contact `c`, with the gradients of its
+/// relative displacements δₙ, δₛ ([`contact_gradient`]).
+fn for_contact_dofs(mesh: &Mesh, c: &Contact, mut f: impl FnMut(usize, f64, f64)) {
+    let (ml, mm) = mesh.contact_maps(c);
+    let gn = contact_gradient(&ml, &mm, c.normal);
+    let gs = contact_gradient(&ml, &mm, [-c.normal[1], c.normal[0]]);
+    for i in 0..ml.len + mm.len {
+        let dof = if i < ml.len {
+            ml.dofs[i]
+        } else {
+            mm.dofs[i - ml.len]
+        };
+        if dof != CONSTRAINED {
+            f(dof as usize, gn[i], gs[i]);
+        }
+    }
+}
+
+/// Add the local force [Fₙ, Fₛ] (N) of contact `c` to the global vector `out`:
+/// out += Fₙ gₙ + Fₛ gₛ (the contact's share of F_int, METHOD.md §3).
+pub fn add_contact_force(mesh: &Mesh, c: &Contact, f: [f64; 2], out: &mut [f64]) {
+    for_contact_dofs(mesh, c, |d, gn, gs| out[d] += f[0] * gn + f[1] * gs);
 }
 
 /// Contact stiffness (N/m) K = Tᵀ K′ T mapped to the unknowns: Σ_ab g_a k_ab g_bᵀ over

@@ -405,6 +405,7 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             };
             let fig = output::figures::Deformed::from_dir(&dir)?;
             let curve = output::read::curve(&dir)?;
+            let history = output::read::history(&dir)?;
             let summary = output::read::summary(&dir)?;
             let control = summary["curve"]["control_block"]
                 .as_str()
@@ -415,6 +416,7 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                 &fig_dir,
                 &fig,
                 curve.as_deref().map(|r| (r, control.as_str())),
+                history.as_ref().filter(|h| !h.rows.is_empty()),
                 amplification,
                 &formats,
             )?;

@@ -1,7 +1,8 @@
 //! The default figures of a run (`DIR/figures/`): the deformed configuration
 //! (`deformed.png/.svg`, as the seed's Figs. 4 and 6 draw it: the initial blocks and the
 //! deformed ones with an amplified displacement) and, for a capacity analysis, the
-//! capacity curve (`capacity_curve.png/.svg`).
+//! capacity curve (`capacity_curve.png/.svg`); for a dynamic run, the displacement
+//! histories (`history.png/.svg`, [`super::time_history`]).
 //!
 //! A figure is drawn from a [`Deformed`], which is built either from a run in memory
 //! ([`Deformed::from_run`]) or from the files it wrote ([`Deformed::from_dir`]); both hold
@@ -825,11 +826,13 @@ fn draw_curve<DB: DrawingBackend>(
 }
 
 /// The figure files written for `formats` into `dir` (created): deformed.* always,
-/// capacity_curve.* when `curve` is given as (rows, control block name).
+/// capacity_curve.* when `curve` is given as (rows, control block name), history.* when
+/// a dynamic run's `history` is given ([`super::time_history`]).
 pub fn write_figures(
     dir: &Path,
     fig: &Deformed,
     curve: Option<(&[[f64; 3]], &str)>,
+    history: Option<&crate::analysis::dynamics::History>,
     amplification: Option<f64>,
     formats: &[Format],
 ) -> Result<Vec<PathBuf>> {
@@ -849,6 +852,13 @@ pub fn write_figures(
             let path = dir.join(format!("capacity_curve.{}", f.extension()));
             draw_atomic(&path, |tmp| {
                 capacity_curve(tmp, &fig.title, rows, control, f)
+            })?;
+            written.push(path);
+        }
+        if let Some(h) = history {
+            let path = dir.join(format!("history.{}", f.extension()));
+            draw_atomic(&path, |tmp| {
+                super::time_history::history(tmp, &fig.title, h, f)
             })?;
             written.push(path);
         }

@@ -5,6 +5,7 @@
 pub mod figures;
 pub mod plot;
 pub mod read;
+pub mod time_history;
 pub mod vtk;
 
 use crate::analysis::checkpoint::{self, Checkpoint};
@@ -164,6 +165,7 @@ pub fn write_figures(
         dir,
         &fig,
         rows.as_deref().map(|r| (r, control)),
+        out.history.as_ref().filter(|h| !h.rows.is_empty()),
         amplification,
         formats,
     )

@@ -2,6 +2,7 @@
 //! `curve.csv`, for `dfem plot DIR`. Only the subset of VTK XML that dfem writes is read:
 //! `<DataArray ... Name="..." ...>values</DataArray>` with ASCII values.
 
+use crate::analysis::dynamics::History;
 use crate::{Error, Result};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -161,13 +162,21 @@ pub fn summary(dir: &Path) -> Result<serde_json::Value> {
     serde_json::from_str(&text).map_err(|e| damaged(&path, e))
 }
 
-/// Read `DIR/curve.csv` (header `load_factor,ux_m,uy_m`) if it exists: (λ, ux, uy) rows.
-pub fn curve(dir: &Path) -> Result<Option<Vec<[f64; 3]>>> {
-    let path = dir.join("curve.csv");
+/// Read the numeric CSV file `DIR/name` if it exists: its header's column names and its
+/// rows, each with at least `min_cols` values (a damaged file is an error).
+fn numeric_csv(dir: &Path, name: &str, min_cols: usize) -> Result<Option<History>> {
+    let path = dir.join(name);
     if !path.is_file() {
         return Ok(None);
     }
     let text = std::fs::read_to_string(&path).map_err(|e| damaged(&path, e))?;
+    let header = text
+        .lines()
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(|c| c.trim().to_string())
+        .collect();
     let mut rows = Vec::new();
     for (i, line) in text.lines().enumerate().skip(1) {
         if line.trim().is_empty() {
@@ -178,15 +187,30 @@ pub fn curve(dir: &Path) -> Result<Option<Vec<[f64; 3]>>> {
             .map(|x| x.trim().parse::<f64>())
             .collect::<std::result::Result<_, _>>()
             .map_err(|e| damaged(&path, format!("line {}: {e}", i + 1)))?;
-        if v.len() < 3 {
+        if v.len() < min_cols {
             return Err(damaged(
                 &path,
-                format!("line {} has fewer than 3 columns", i + 1),
+                format!("line {} has fewer than {min_cols} columns", i + 1),
             ));
         }
-        rows.push([v[0], v[1], v[2]]);
+        rows.push(v);
     }
-    Ok(Some(rows))
+    Ok(Some(History {
+        columns: header,
+        rows,
+        frames: vec![],
+    }))
+}
+
+/// Read `DIR/curve.csv` (header `load_factor,ux_m,uy_m`) if it exists: (λ, ux, uy) rows.
+pub fn curve(dir: &Path) -> Result<Option<Vec<[f64; 3]>>> {
+    Ok(numeric_csv(dir, "curve.csv", 3)?
+        .map(|h| h.rows.iter().map(|v| [v[0], v[1], v[2]]).collect()))
+}
+
+/// Read `DIR/history.csv` (a dynamic run's, docs/outputs.md) if it exists.
+pub fn history(dir: &Path) -> Result<Option<History>> {
+    numeric_csv(dir, "history.csv", 1)
 }
 
 #[cfg(test)]

@@ -141,6 +141,7 @@ const ANALYSIS_KEYS: &[&str] = &[
     "rayleigh",
     "initial",
     "impact_reset",
+    "inertia",
 ];
 
 /// Read and validate a scene file.

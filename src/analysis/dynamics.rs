@@ -148,7 +148,7 @@ pub struct Settings {
 impl Settings {
     pub fn from_scene(scene: &Scene) -> Result<Settings> {
         let x = &scene.analysis.extra;
-        let place = |k: &str| format!("[analysis] key '{k}'");
+        let place = super::analysis_place;
         let num = |k: &str, d: f64, lo: f64, hi: f64| super::analysis_number(scene, k, d, lo, hi);
         let scheme = match x.get("integrator").map(|v| v.as_str()) {
             None | Some(Some("hht")) => Scheme::hht(num("alpha", 0.05, 0.0, 1.0 / 3.0)?),

@@ -180,6 +180,11 @@ fn record_resources(out: &mut Outcome, backend: &dyn LinearBackend) {
     out.stats.peak_memory_mb = crate::resources::peak_resident_bytes().map(|b| b as f64 / 1e6);
 }
 
+/// Where an `[analysis]` key stands, for error messages.
+pub(crate) fn analysis_place(k: &str) -> String {
+    format!("[analysis] key '{k}'")
+}
+
 /// The number under `[analysis]` key `k`, `d` when absent; an error naming the key and
 /// the allowed range `[lo, hi]` when it is not a finite number in it.
 pub(crate) fn analysis_number(scene: &Scene, k: &str, d: f64, lo: f64, hi: f64) -> Result<f64> {
@@ -195,7 +200,7 @@ pub(crate) fn analysis_number(scene: &Scene, k: &str, d: f64, lo: f64, hi: f64) 
     } else {
         Err(
             Error::new(format!("'{k}' must be a number from {lo} to {hi}"))
-                .place(format!("[analysis] key '{k}'"))
+                .place(analysis_place(k))
                 .fix(format!("for example {k} = {d}")),
         )
     }

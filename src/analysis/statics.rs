@@ -62,7 +62,7 @@ pub struct Settings {
 impl Settings {
     pub fn from_scene(scene: &Scene) -> Result<Settings> {
         let x = &scene.analysis.extra;
-        let place = |k: &str| format!("[analysis] key '{k}'");
+        let place = super::analysis_place;
         let strategy = match x.get("strategy") {
             None => Strategy::Secant,
             Some(v) => v.as_str().and_then(Strategy::parse).ok_or_else(|| {

@@ -220,8 +220,9 @@ fn stopped_run_is_valid_and_resumes_to_the_same_history() {
     }
 }
 
-/// Start the run as a child process and wait until history.csv holds `rows` rows.
-fn start_and_wait(scene: &Path, out: &Path, rows: usize) -> std::process::Child {
+/// Start the run as a child process and wait until history.csv holds the row of
+/// step `step` (rows 0..=step after the header).
+fn start_and_wait(scene: &Path, out: &Path, step: usize) -> std::process::Child {
     let mut child = Command::new(common::dfem_bin())
         .args([
             "run",
@@ -237,16 +238,17 @@ fn start_and_wait(scene: &Path, out: &Path, rows: usize) -> std::process::Child 
     let t0 = Instant::now();
     loop {
         let n = std::fs::read_to_string(out.join("history.csv"))
-            .map(|h| h.lines().count())
+            .map(|h| h.matches('\n').count())
             .unwrap_or(0);
-        if n > rows {
+        // complete lines only: the header and the rows of steps 0..=step
+        if n > step + 1 {
             return child;
         }
         if t0.elapsed() > Duration::from_secs(120) || child.try_wait().unwrap().is_some() {
             let _ = child.kill();
             let o = child.wait_with_output().unwrap();
             panic!(
-                "the run did not reach step {rows}: {}",
+                "the run did not reach step {step}: {}",
                 String::from_utf8_lossy(&o.stderr)
             );
         }

@@ -265,3 +265,233 @@ fn joint_to_block_stiffness_every_decade() {
         stack_case(10f64.powi(p));
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// Time steps over three decades (implicit dynamics, METHOD.md §6)
+
+use dfem::analysis::dynamics::History;
+
+const G: f64 = 9.81;
+
+/// Time steps (s) of the sweeps: every half decade from 10⁻⁴ to 10⁻¹ s.
+const DTS: [f64; 7] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1];
+
+/// Rock and a stiff dry joint (the material pair of tests/validation_dynamics.rs):
+/// kₙ = Eₙ A / h = 2.5·10¹² N/m on a half-metre contact, so the contact's own period
+/// 2π √(m/kₙ) ≈ 2·10⁻⁴ s for a 2.5 t block: every Δt here but the smallest steps over it.
+fn rock_and_joint(phi: f64) -> String {
+    format!(
+        r#"
+[[material]]
+name = "rock"
+lame_lambda = 56e9
+lame_mu = 21e9
+unit_weight = 25e3
+[[joint]]
+name = "j"
+normal_modulus = 50e9
+shear_modulus = 5e9
+band = 0.01
+friction_angle = {phi}
+"#
+    )
+}
+
+/// `[analysis]` of a dynamic run.
+fn dynamic(dt: f64, duration: f64, integrator: &str) -> String {
+    format!(
+        "[analysis]\ntype = \"dynamic\"\ndt = {dt:e}\nduration = {duration}\n{}\n",
+        match integrator {
+            "gen-alpha-0" => "integrator = \"generalized-alpha\"\nrho_inf = 0.0".to_string(),
+            i => format!("integrator = \"{i}\""),
+        }
+    )
+}
+
+/// A 1 m × 1 m block on an incline α (degrees), joint friction φ.
+fn incline(alpha: f64, phi: f64, kind: &str, dt: f64, integrator: &str) -> String {
+    format!(
+        r#"{}
+[[generate]]
+type = "incline"
+material = "rock"
+kind = "{kind}"
+slope_angle = {alpha}
+breadth = 1.0
+height = 1.0
+slope_length = 12.0
+{}"#,
+        rock_and_joint(phi),
+        dynamic(dt, 1.0, integrator)
+    )
+}
+
+/// The result of one dynamic run of the time-step sweep.
+struct Run {
+    out: dfem::analysis::Outcome,
+    history: History,
+}
+
+fn run_dynamic(text: &str) -> Run {
+    let sc = common::scene(text);
+    let (_, mut out) = common::solve(&sc);
+    assert_finite(&out);
+    let history = out.history.take().expect("a dynamic run has a history");
+    assert!(
+        history.rows.iter().flatten().all(|v| v.is_finite()),
+        "non-finite history"
+    );
+    Run { out, history }
+}
+
+/// Mechanical energy gained beyond the work of the loads (J) at every row: kinetic +
+/// elastic − initial elastic − work of gravity and ground. Friction and viscosity only
+/// remove energy and HHT/generalized-α only dissipate, so it must stay ≤ 0 up to the
+/// iteration tolerance; positive, the integration creates energy.
+fn energy_gain(h: &History) -> Vec<f64> {
+    let (k, e, w, wg) = (
+        common::col(h, "E_kinetic"),
+        common::col(h, "E_elastic"),
+        common::col(h, "W_gravity"),
+        common::col(h, "W_ground"),
+    );
+    (0..k.len())
+        .map(|i| k[i] + e[i] - e[0] - w[i] - wg[i])
+        .collect()
+}
+
+/// One row of the time-step table: Δt, closed form, dfem, error, time steps, nonlinear
+/// iterations per (sub)step, extra sub-steps made by step cuts, factorizations, smallest
+/// pivot ratio, and the largest energy gain relative to the work of gravity.
+fn time_row(case: &str, dt: f64, expected: f64, got: f64, r: &Run) {
+    let s = &r.out.stats;
+    let steps = r.history.rows.len() - 1;
+    let w = common::col(&r.history, "W_gravity")
+        .iter()
+        .fold(0.0f64, |m, x| m.max(x.abs()));
+    let gain = energy_gain(&r.history).iter().fold(f64::MIN, |m, x| m.max(*x));
+    eprintln!(
+        "| {case} | {dt:e} | {expected:.6e} | {got:.6e} | {:.2e} | {steps} | {:.2} | {} | {} | {:.1e} | {:.1e} |",
+        if expected == 0.0 { got.abs() } else { common::rel_err(got, expected) },
+        s.iterations as f64 / s.increments.max(1) as f64,
+        s.increments.saturating_sub(steps),
+        s.factorizations,
+        s.min_pivot_ratio,
+        if w > 0.0 { gain / w } else { gain },
+    );
+}
+
+/// Distance (m) the tracked block `name` moved, at every row.
+fn travel(h: &History, name: &str) -> Vec<f64> {
+    let (ux, uy) = (
+        common::col(h, &format!("{name}.ux")),
+        common::col(h, &format!("{name}.uy")),
+    );
+    ux.iter().zip(&uy).map(|(x, y)| x.hypot(*y)).collect()
+}
+
+/// Case 1: a block released on an incline α = 30° > φ = 20° slides
+/// s(t) = ½ g (sin α − cos α tan φ) t² (METHOD.md §6); at t = 1 s, s = 0.906 m.
+fn sliding_case(kind: &str, integrator: &str, dt: f64) {
+    let (alpha, phi) = (30f64.to_radians(), 20f64.to_radians());
+    let r = run_dynamic(&incline(30.0, 20.0, kind, dt, integrator));
+    assert_eq!(r.out.status, Status::Stable, "Δt = {dt}: {:?}", r.out.status);
+    let t = *common::col(&r.history, "t").last().unwrap();
+    let exact = 0.5 * G * (alpha.sin() - alpha.cos() * phi.tan()) * t * t;
+    let s = *travel(&r.history, "block").last().unwrap();
+    time_row(
+        &format!("sliding, {kind}, {integrator}"),
+        dt,
+        exact,
+        s,
+        &r,
+    );
+    assert!((t - 1.0).abs() < 1e-12, "the run ends at t = {t}");
+    let err = common::rel_err(s, exact);
+    assert!(err < 1e-3, "Δt = {dt}: s = {s} m, expected {exact} m");
+}
+
+/// Case 2: α = 20° < φ = 30°: the block must stay (below 10⁻⁶ m at every step).
+fn sticking_case(kind: &str, integrator: &str, dt: f64) {
+    let r = run_dynamic(&incline(20.0, 30.0, kind, dt, integrator));
+    assert_eq!(r.out.status, Status::Stable, "Δt = {dt}: {:?}", r.out.status);
+    let umax = travel(&r.history, "block").iter().fold(0.0f64, |m, x| m.max(*x));
+    time_row(&format!("sticking, {kind}, {integrator}"), dt, 0.0, umax, &r);
+    assert!(umax < 1e-6, "Δt = {dt}: the block moved {umax} m");
+}
+
+/// Case 3: a rigid 1 m box released 0.2 m above a fixed base lands (on contacts found
+/// during the run) at the free-fall speed √(2 g h) ≈ 2 m/s on penalty springs whose
+/// period (≈ 2·10⁻⁴ s) every Δt but the smallest steps over: large steps are genuinely
+/// hard. Every Δt must give a bounded answer — never below the base by more than the
+/// band, never above its start, no energy gained — or report a failure with a reason.
+fn drop_case(integrator: &str, dt: f64) {
+    let h0 = 0.2;
+    let text = format!(
+        r#"{}
+[[block]]
+name = "base"
+material = "rock"
+support = "fixed"
+vertices = [[-1.0, -0.5], [2.0, -0.5], [2.0, 0.0], [-1.0, 0.0]]
+[[block]]
+name = "box"
+material = "rock"
+kind = "rigid"
+vertices = [[0.0, {h0}], [1.0, {h0}], [1.0, {h1}], [0.0, {h1}]]
+{}"#,
+        rock_and_joint(30.0),
+        dynamic(dt, 1.0, integrator),
+        h1 = h0 + 1.0
+    );
+    let r = run_dynamic(&text);
+    let uy = common::col(&r.history, "box.uy");
+    // the static settlement W / (2 kₙ) on the two corner contacts
+    let settle = 25e3 / (2.0 * 50e9 * 0.5 / 0.01);
+    let end = -uy.last().unwrap() - h0;
+    time_row(&format!("drop, {integrator}"), dt, settle, end, &r);
+    if let Status::Failed { reason, .. } = &r.out.status {
+        assert!(!reason.is_empty());
+        eprintln!("Δt = {dt}: failed: {reason}");
+    }
+    let lowest = uy.iter().fold(f64::INFINITY, |m, x| m.min(*x));
+    let highest = uy.iter().fold(f64::NEG_INFINITY, |m, x| m.max(*x));
+    assert!(lowest > -h0 - 0.01, "Δt = {dt}: through the base: {lowest}");
+    assert!(highest < 1e-6, "Δt = {dt}: above its start: {highest}");
+    let w = 25e3 * h0;
+    let gain = energy_gain(&r.history).iter().fold(f64::MIN, |m, x| m.max(*x));
+    assert!(gain < 1e-3 * w, "Δt = {dt}: energy gained {gain} J");
+}
+
+/// Run `case` for every Δt of [`DTS`], every row printed even when one fails (a panic,
+/// caught); then fail with the list of the cases that did.
+fn sweep(failed: &mut Vec<String>, label: &str, case: impl Fn(f64) + std::panic::RefUnwindSafe) {
+    for dt in DTS {
+        if std::panic::catch_unwind(|| case(dt)).is_err() {
+            failed.push(format!("{label}, Δt = {dt:e}"));
+        }
+    }
+}
+
+#[test]
+fn time_steps_over_three_decades() {
+    let mut failed = vec![];
+    sweep(&mut failed, "sliding", |dt| sliding_case("rigid", "hht", dt));
+    sweep(&mut failed, "sticking", |dt| sticking_case("rigid", "hht", dt));
+    sweep(&mut failed, "drop", |dt| drop_case("hht", dt));
+    assert!(failed.is_empty(), "failed: {failed:?}");
+}
+
+#[test]
+#[ignore = "every integrator, deformable blocks: a few minutes"]
+fn time_steps_every_integrator_and_deformable_blocks() {
+    let mut failed = vec![];
+    for integrator in ["newmark", "gen-alpha-0"] {
+        sweep(&mut failed, integrator, |dt| sliding_case("rigid", integrator, dt));
+        sweep(&mut failed, integrator, |dt| sticking_case("rigid", integrator, dt));
+        sweep(&mut failed, integrator, |dt| drop_case(integrator, dt));
+    }
+    sweep(&mut failed, "deformable", |dt| sliding_case("deformable", "hht", dt));
+    sweep(&mut failed, "deformable", |dt| sticking_case("deformable", "hht", dt));
+    assert!(failed.is_empty(), "failed: {failed:?}");
+}

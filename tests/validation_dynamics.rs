@@ -29,14 +29,7 @@ fn run(text: &str) -> History {
     out.history.expect("a dynamic run has a history")
 }
 
-fn col(h: &History, name: &str) -> Vec<f64> {
-    let k = h
-        .columns
-        .iter()
-        .position(|c| c == name)
-        .unwrap_or_else(|| panic!("no column {name} in {:?}", h.columns));
-    h.rows.iter().map(|r| r[k]).collect()
-}
+use common::col;
 
 /// Energy balance error relative to the external work (absolute values summed).
 fn energy_error(h: &History) -> f64 {

@@ -30,6 +30,16 @@ pub fn tmp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// The column `name` of a dynamic run's history.
+pub fn col(h: &dfem::analysis::dynamics::History, name: &str) -> Vec<f64> {
+    let k = h
+        .columns
+        .iter()
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no column {name} in {:?}", h.columns));
+    h.rows.iter().map(|r| r[k]).collect()
+}
+
 pub fn rel_err(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }

@@ -273,29 +273,11 @@ use dfem::analysis::dynamics::History;
 
 const G: f64 = 9.81;
 
-/// Time steps (s) of the sweeps: every half decade from 10⁻⁴ to 10⁻¹ s.
+/// Time steps (s) of the sweeps: every half decade from 10⁻⁴ to 10⁻¹ s. With the rock and
+/// joint of [`common::rock_and_joint`] a 1 m contact side has kₙ = Eₙ A / h = 5·10¹² N/m,
+/// so the contacts' own period 2π √(m/kₙ) under a 2.5 t block is 1.4·10⁻⁴ s: every Δt but
+/// the smallest steps over it.
 const DTS: [f64; 7] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1];
-
-/// Rock and a stiff dry joint (the material pair of tests/validation_dynamics.rs):
-/// kₙ = Eₙ A / h = 2.5·10¹² N/m on a half-metre contact, so the contact's own period
-/// 2π √(m/kₙ) ≈ 2·10⁻⁴ s for a 2.5 t block: every Δt here but the smallest steps over it.
-fn rock_and_joint(phi: f64) -> String {
-    format!(
-        r#"
-[[material]]
-name = "rock"
-lame_lambda = 56e9
-lame_mu = 21e9
-unit_weight = 25e3
-[[joint]]
-name = "j"
-normal_modulus = 50e9
-shear_modulus = 5e9
-band = 0.01
-friction_angle = {phi}
-"#
-    )
-}
 
 /// `[analysis]` of a dynamic run.
 fn dynamic(dt: f64, duration: f64, integrator: &str) -> String {
@@ -305,24 +287,6 @@ fn dynamic(dt: f64, duration: f64, integrator: &str) -> String {
             "gen-alpha-0" => "integrator = \"generalized-alpha\"\nrho_inf = 0.0".to_string(),
             i => format!("integrator = \"{i}\""),
         }
-    )
-}
-
-/// A 1 m × 1 m block on an incline α (degrees), joint friction φ.
-fn incline(alpha: f64, phi: f64, kind: &str, dt: f64, integrator: &str) -> String {
-    format!(
-        r#"{}
-[[generate]]
-type = "incline"
-material = "rock"
-kind = "{kind}"
-slope_angle = {alpha}
-breadth = 1.0
-height = 1.0
-slope_length = 12.0
-{}"#,
-        rock_and_joint(phi),
-        dynamic(dt, 1.0, integrator)
     )
 }
 
@@ -395,7 +359,12 @@ fn travel(h: &History, name: &str) -> Vec<f64> {
 /// s(t) = ½ g (sin α − cos α tan φ) t² (METHOD.md §6); at t = 1 s, s = 0.906 m.
 fn sliding_case(kind: &str, integrator: &str, dt: f64) {
     let (alpha, phi) = (30f64.to_radians(), 20f64.to_radians());
-    let r = run_dynamic(&incline(30.0, 20.0, kind, dt, integrator));
+    let r = run_dynamic(&common::incline(
+        30.0,
+        20.0,
+        kind,
+        &dynamic(dt, 1.0, integrator),
+    ));
     assert_eq!(
         r.out.status,
         Status::Stable,
@@ -421,7 +390,12 @@ fn sliding_case(kind: &str, integrator: &str, dt: f64) {
 
 /// Case 2: α = 20° < φ = 30°: the block must stay (below 10⁻⁶ m at every step).
 fn sticking_case(kind: &str, integrator: &str, dt: f64) {
-    let r = run_dynamic(&incline(20.0, 30.0, kind, dt, integrator));
+    let r = run_dynamic(&common::incline(
+        20.0,
+        30.0,
+        kind,
+        &dynamic(dt, 1.0, integrator),
+    ));
     assert_eq!(
         r.out.status,
         Status::Stable,
@@ -445,22 +419,7 @@ fn sticking_case(kind: &str, integrator: &str, dt: f64) {
 
 /// A 1 m box (`kind`) with its base `h0` (m) above a fixed base block, φ = 30°.
 fn box_on_base(kind: &str, h0: f64, analysis: &str) -> String {
-    format!(
-        r#"{}
-[[block]]
-name = "base"
-material = "rock"
-support = "fixed"
-vertices = [[-1.0, -0.5], [2.0, -0.5], [2.0, 0.0], [-1.0, 0.0]]
-[[block]]
-name = "box"
-material = "rock"
-kind = "{kind}"
-vertices = [[0.0, {h0}], [1.0, {h0}], [1.0, {h1}], [0.0, {h1}]]
-{analysis}"#,
-        rock_and_joint(30.0),
-        h1 = h0 + 1.0
-    )
+    common::rock_and_joint(30.0) + &common::box_above_base(kind, h0) + analysis
 }
 
 /// Case 3: a 1 m box released 0.2 m above a fixed base lands (on contacts found during

@@ -137,7 +137,9 @@ pub struct Settings {
     /// from zero contact forces with gravity applied at t = 0 (`initial = "rest"`).
     pub preload: bool,
     /// Recompute the acceleration after a step in which a contact opened or closed
-    /// ([`Dynamics::filtered_acceleration`]); `impact_reset = false` turns it off.
+    /// ([`Dynamics::filtered_acceleration`]), and redo a step in which a loaded contact
+    /// lets go without its force at the start ([`Dynamics::release`], docs/theory.md
+    /// "Impacts"); `impact_reset = false` turns both off.
     pub reset_on_impact: bool,
     /// Keep the inertia M ü (default). `inertia = false`: the seed's pseudo-dynamic
     /// analysis (its §4.2 end, §4.3): C u̇ + F_int(u) = F(t), integrated by backward

@@ -137,7 +137,9 @@ pub struct Settings {
     /// from zero contact forces with gravity applied at t = 0 (`initial = "rest"`).
     pub preload: bool,
     /// Recompute the acceleration after a step in which a contact opened or closed
-    /// ([`Dynamics::filtered_acceleration`]); `impact_reset = false` turns it off.
+    /// ([`Dynamics::filtered_acceleration`]), and redo a step in which a loaded contact
+    /// lets go without its force at the start ([`Dynamics::release`], docs/theory.md
+    /// "Impacts"); `impact_reset = false` turns both off.
     pub reset_on_impact: bool,
     /// Keep the inertia M ü (default). `inertia = false`: the seed's pseudo-dynamic
     /// analysis (its §4.2 end, §4.3): C u̇ + F_int(u) = F(t), integrated by backward
@@ -485,6 +487,12 @@ impl<'a> Dynamics<'a> {
     /// one step, which the next steps would otherwise carry on (through the a₀ terms of
     /// the update) after the contact has let go, feeding energy into the free motion.
     fn filtered_acceleration(&mut self) {
+        let states = self.committed.state.clone();
+        self.filtered_acceleration_with(&states);
+    }
+
+    /// [`Dynamics::filtered_acceleration`] with the contact states `states` in K_s.
+    fn filtered_acceleration_with(&mut self, states: &[ContactState]) {
         let f = self.f_ext(self.time);
         let r: Vec<f64> = (0..f.len())
             .map(|i| f[i] - self.f_int[i] - self.f_visc[i])
@@ -492,7 +500,7 @@ impl<'a> Dynamics<'a> {
         let h = self.settings.dt;
         let beta = self.settings.scheme.beta;
         let local: Vec<LocalStiffness> = (0..self.springs.len())
-            .map(|k| secant_local(self.springs[k], self.committed.state[k]))
+            .map(|k| secant_local(self.springs[k], states[k]))
             .collect();
         self.system
             .stiffness_into(&self.cur, &local, &mut self.kbuf);
@@ -1025,7 +1033,23 @@ impl<'a> Dynamics<'a> {
         let mut h = target - self.time;
         while self.time < target - 1e-9 * self.settings.dt {
             h = h.min(target - self.time);
-            match self.step(h)? {
+            let mut accepted = self.step(h)?;
+            if let Some(released) = accepted.as_ref().and_then(|acc| self.released(acc)) {
+                // contacts that carried force at the start let go within the step: their
+                // force, still in a₀ and F_int(u₀), would act over the whole step through
+                // the (½ − β) h² a₀ and (1 − γ) h a₀ terms of the update (and α_m M a₀,
+                // α_f F_int(u₀)), an impulse of about ½ h Fₙ where the band releases in a
+                // fraction of the step: energy fed into the free motion (a block dropped on
+                // its base bounced higher than it fell). The step is redone from the
+                // start's acceleration and internal force without them.
+                let saved = (self.a.clone(), self.f_int.clone());
+                self.release(&released);
+                accepted = self.step(h)?;
+                if accepted.is_none() {
+                    (self.a, self.f_int) = saved;
+                }
+            }
+            match accepted {
                 Some(acc) => {
                     let before: Vec<bool> = self
                         .committed
@@ -1057,6 +1081,39 @@ impl<'a> Dynamics<'a> {
         }
         self.time = target;
         Ok(true)
+    }
+
+    /// The contacts a converged step opens that were closed at its start, if any (with
+    /// `impact_reset` and inertia: the steps [`Dynamics::advance_to`] redoes).
+    fn released(&self, acc: &Accepted) -> Option<Vec<bool>> {
+        let released: Vec<bool> = self
+            .committed
+            .state
+            .iter()
+            .zip(&acc.trial.state)
+            .map(|(s0, s1)| *s0 != ContactState::Open && *s1 == ContactState::Open)
+            .collect();
+        (self.settings.reset_on_impact && self.settings.inertia && released.contains(&true))
+            .then_some(released)
+    }
+
+    /// The start of a step in which the contacts `released` let go: the internal force
+    /// F_int(u₀) without their forces, and the acceleration
+    /// (M + βh² K_s) a₀ = F − F_int(u₀) − C v₀ with them open (the released contact
+    /// exerts nothing over the step; the stiff modes of the others stay filtered as in
+    /// [`Dynamics::filtered_acceleration`]). The committed state itself is kept: the
+    /// band's elastic energy at the start, ½ Fₙ²/kₙ, is what the release loses.
+    fn release(&mut self, released: &[bool]) {
+        let mut free = self.committed.clone();
+        for (k, _) in released.iter().enumerate().filter(|(_, r)| **r) {
+            free.force[k] = [0.0; 2];
+            free.state[k] = ContactState::Open;
+        }
+        let states = free.state.clone();
+        let kept = std::mem::replace(&mut self.committed, free);
+        self.f_int = self.trial(&vec![0.0; self.cur.n_dofs]).f_int;
+        self.committed = kept;
+        self.filtered_acceleration_with(&states);
     }
 
     /// The force (N) contact `k` carries: the committed one, zero when it is open.

@@ -30,6 +30,75 @@ pub fn tmp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// TOML of the rock (λ = 56 GPa, μ = 21 GPa, γ = 25 kN/m³) and the dry joint "j"
+/// (Eₙ = 50 GPa, Gₛ = 5 GPa, band 1 cm, friction angle `phi` in degrees, no cohesion) of
+/// the dynamic tests.
+pub fn rock_and_joint(phi: f64) -> String {
+    format!(
+        r#"
+[[material]]
+name = "rock"
+lame_lambda = 56e9
+lame_mu = 21e9
+unit_weight = 25e3
+[[joint]]
+name = "j"
+normal_modulus = 50e9
+shear_modulus = 5e9
+band = 0.01
+friction_angle = {phi}
+"#
+    )
+}
+
+/// A 1 m × 1 m rock block (`kind`) on an incline α (degrees) with joint friction φ
+/// (degrees), then `analysis` (the `[analysis]` table and anything after it).
+pub fn incline(alpha: f64, phi: f64, kind: &str, analysis: &str) -> String {
+    format!(
+        r#"{}
+[[generate]]
+type = "incline"
+material = "rock"
+kind = "{kind}"
+slope_angle = {alpha}
+breadth = 1.0
+height = 1.0
+slope_length = 12.0
+{analysis}"#,
+        rock_and_joint(phi)
+    )
+}
+
+/// Blocks "base" (fixed, 3 m × 0.5 m, top at y = 0) and "box" (1 m × 1 m rock, `kind`,
+/// its bottom `h0` (m) above the base).
+pub fn box_above_base(kind: &str, h0: f64) -> String {
+    format!(
+        r#"
+[[block]]
+name = "base"
+material = "rock"
+support = "fixed"
+vertices = [[-1.0, -0.5], [2.0, -0.5], [2.0, 0.0], [-1.0, 0.0]]
+[[block]]
+name = "box"
+material = "rock"
+kind = "{kind}"
+vertices = [[0.0, {h0}], [1.0, {h0}], [1.0, {h1}], [0.0, {h1}]]
+"#,
+        h1 = h0 + 1.0
+    )
+}
+
+/// The column `name` of a dynamic run's history.
+pub fn col(h: &dfem::analysis::dynamics::History, name: &str) -> Vec<f64> {
+    let k = h
+        .columns
+        .iter()
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no column {name} in {:?}", h.columns));
+    h.rows.iter().map(|r| r[k]).collect()
+}
+
 pub fn rel_err(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }

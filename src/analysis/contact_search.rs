@@ -27,7 +27,7 @@
 //! contact whose m node has slid past the end of its edge of block l.
 
 use crate::geometry::joints::candidate_pairs;
-use crate::geometry::polygon::{bbox, dot, norm, sub, Point};
+use crate::geometry::polygon::{bbox, contains, dot, norm, sub, Point};
 use crate::material::ContactState;
 use crate::mesh::{BlockDofs, Contact, Mesh};
 
@@ -186,6 +186,12 @@ pub fn search(mesh: &Mesh, vel: &[Point], band: f64, reach: f64) -> Vec<Found> {
                     }
                 }
                 let Some((d, e, w)) = best else { continue };
+                // behind the edge's line by more than the band: a contact only where the
+                // vertex is inside block l (an overlap to push out), not where it lies
+                // beyond the block's far side (a large reach reaches through thin blocks)
+                if d < -band && !contains(pl, x) {
+                    continue;
+                }
                 let (na, nb) = (
                     mesh.blocks[bl].boundary[e],
                     mesh.blocks[bl].boundary[(e + 1) % nl],

@@ -52,6 +52,15 @@ pub struct Stats {
     pub reused_factorizations: usize,
     /// Conjugate-gradient iterations of those corrections.
     pub reuse_iterations: usize,
+    /// Increments of the secant strategy that went on with tangent (Newton) steps after
+    /// the secant iterations stalled.
+    pub tangent_fallbacks: usize,
+    /// Converged time steps of a dynamic run cut because a contact closed by more than
+    /// the band thickness within the step (an impact the step could not resolve).
+    pub impact_cuts: usize,
+    /// Contacts of a dynamic run held open for the rest of a time step after cycling
+    /// between open and closed in its iterations.
+    pub held_open: usize,
     pub wall_time_s: f64,
     pub min_pivot_ratio: f64,
     /// Stored entries of the last factor of the linear backend (its memory is 8 bytes

@@ -38,6 +38,7 @@ pub struct Params {
     pub pier_width: Option<f64>,
     pub pier_courses: usize,
     pub base: bool,
+    pub base_width: Option<f64>,
     pub arc_segments: usize,
 }
 
@@ -54,6 +55,7 @@ impl Default for Params {
             pier_width: None,
             pier_courses: 4,
             base: true,
+            base_width: None,
             arc_segments: 1,
         }
     }
@@ -85,6 +87,10 @@ pub const KEYS: &[(&str, &str)] = &[
         "the number of blocks in each pier, an integer >= 1",
     ),
     ("base", "true or false (a fixed base under both piers)"),
+    (
+        "base_width",
+        "the width of the fixed base in m, centred under the arch, at least the piers' outer width",
+    ),
     (
         "arc_segments",
         "the number of straight segments per voussoir face, an integer >= 1",
@@ -353,11 +359,27 @@ pub fn generate(params: &toml::Table) -> Result<Vec<GeneratedBlock>, GenError> {
     };
     if hp > 0.0 {
         if p.base {
-            out.push(block(
-                "base",
-                rect(xl - pw, -pw, 0.5 * s + 2.0 * pw, 0.0),
-                true,
-            ));
+            // default: one pier width beyond each pier; wider where blocks that topple
+            // off the piers must land on it (a collapse under ground motion)
+            let outer = 0.5 * s + pw;
+            let half = match p.base_width {
+                None => outer + pw,
+                Some(w) => {
+                    let w = positive("base_width", w, "m")?;
+                    if 0.5 * w < outer {
+                        return Err(gen_err(
+                            Some("base_width"),
+                            format!(
+                                "base_width {w} m is narrower than the piers ({} m)",
+                                2.0 * outer
+                            ),
+                            format!("give base_width >= {}", 2.0 * outer),
+                        ));
+                    }
+                    0.5 * w
+                }
+            };
+            out.push(block("base", rect(-half, -pw, half, 0.0), true));
         }
         let yk: Vec<f64> = (0..=nc)
             .map(|k| {

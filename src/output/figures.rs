@@ -362,7 +362,7 @@ fn bbox(pts: impl Iterator<Item = [f64; 2]>) -> [f64; 4] {
     }
 }
 
-fn plot_err(path: &Path) -> impl Fn(String) -> Error + '_ {
+pub(crate) fn plot_err(path: &Path) -> impl Fn(String) -> Error + '_ {
     move |e| {
         Error::new(format!("cannot draw the figure: {e}"))
             .file(path)
@@ -867,7 +867,7 @@ pub fn write_figures(
 }
 
 /// Draw into a temporary file beside `path`, then rename: a figure is whole or absent.
-fn draw_atomic(path: &Path, draw: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+pub(crate) fn draw_atomic(path: &Path, draw: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())

@@ -20,7 +20,7 @@
 //! series per strategy and one panel per wall, into `DIR/strategies_time_error.png` and
 //! `.svg` (`dfem::output::time_error`; `dfem plot FILE.csv` draws it again from the CSV).
 
-use dfem::output::bench_table::{markdown_line, Table};
+use dfem::output::bench_table::{markdown_line, Table, STRATEGY_COLUMNS};
 use dfem::output::figures::Format;
 use dfem::output::time_error;
 use std::io::Read;
@@ -331,7 +331,7 @@ fn main() {
         "Each run is stopped after {:.0} s; wall time is the analysis only (no parsing/meshing).\n",
         limit.as_secs_f64()
     );
-    let mut table = Table::new(&COLUMNS);
+    let mut table = Table::new(&STRATEGY_COLUMNS);
     print!(
         "{}",
         table.markdown_header(&[true, true, false, true, true, true, true, true, true, true])
@@ -405,20 +405,6 @@ fn main() {
         }
     }
 }
-
-/// The columns of the table (those of `time_error::STRATEGIES` among them).
-const COLUMNS: [&str; 10] = [
-    "blocks",
-    "dofs",
-    "strategy",
-    "tolerance",
-    "bracket",
-    "λ",
-    "error",
-    "iterations",
-    "numeric factorizations",
-    "wall time (s)",
-];
 
 /// Print the row of a run (markdown, as it comes) and return its cells.
 fn print_row(r: &Run, lref: Option<f64>, is_ref: bool) -> Vec<String> {

@@ -15,7 +15,6 @@ use dfem::output::figures::Format;
 use dfem::output::time_error::{self, Plot, COLORS};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// One element of an SVG: its tag, attributes and the text up to the next tag.
 #[derive(Debug)]
@@ -167,15 +166,7 @@ fn a_saved_table_redraws_one_marker_per_row_at_its_place() {
     let csv = dir.join("solvers.csv");
     table.write_csv(&csv).unwrap();
     // the user's way: dfem plot FILE.csv (into the CSV's directory)
-    let out = Command::new(common::dfem_bin())
-        .args(["plot", csv.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = common::dfem_ok(&["plot", csv.to_str().unwrap()]);
     let png = dir.join("solvers_time_error.png");
     let svg_path = dir.join("solvers_time_error.svg");
     assert_eq!(
@@ -260,18 +251,7 @@ fn a_saved_table_redraws_one_marker_per_row_at_its_place() {
 #[test]
 fn a_strategies_table_draws_one_panel_per_wall() {
     let dir = common::tmp_dir("bench_figures_strategies");
-    let mut t = Table::new(&[
-        "blocks",
-        "dofs",
-        "strategy",
-        "tolerance",
-        "bracket",
-        "λ",
-        "error",
-        "iterations",
-        "numeric factorizations",
-        "wall time (s)",
-    ]);
+    let mut t = Table::new(&dfem::output::bench_table::STRATEGY_COLUMNS);
     for (blocks, strategy, error, wall) in [
         ("105", "secant", "(reference)", "1.62"),
         ("105", "initial", "2.2e-1", "2.10"),

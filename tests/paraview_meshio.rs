@@ -112,18 +112,6 @@ fn expected(scene_text: &str) -> Expected {
     }
 }
 
-fn run(args: &[&str]) {
-    let out = Command::new(common::dfem_bin())
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "dfem {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 /// Check one data set meshio read (`ds`) against the expectations, the documented arrays
 /// and dfem's own reader; returns the largest displacement (m) in it.
 fn check_dataset(
@@ -242,7 +230,7 @@ fn meshio_reads_the_static_wall_as_dfem_does() {
         return skip();
     };
     let dir = common::tmp_dir("paraview_meshio_wall");
-    run(&[
+    common::dfem_ok(&[
         "run",
         "--example",
         "wall",
@@ -304,7 +292,7 @@ fn meshio_reads_every_frame_of_a_dynamic_run_as_dfem_does() {
     );
     let scene = dir.join("sliding.toml");
     std::fs::write(&scene, &text).unwrap();
-    run(&[
+    common::dfem_ok(&[
         "run",
         scene.to_str().unwrap(),
         "--quiet",

@@ -35,11 +35,7 @@ impl Table {
                 }
             })
             .collect();
-        format!(
-            "{}\n{}\n",
-            markdown_line(&self.header),
-            markdown_line(&align)
-        )
+        format!("{}\n|{}|\n", markdown_line(&self.header), align.join("|"))
     }
 
     /// The whole table as markdown (every column left-aligned).
@@ -253,6 +249,31 @@ pub fn leading_number(cell: &str) -> Option<f64> {
     cell.split_whitespace().next()?.parse().ok()
 }
 
+/// A time in s: three decimals, or three significant digits under 10 ms (a small matrix
+/// solves in microseconds, which the figure's log axis must still place).
+fn seconds(s: f64) -> String {
+    if s >= 0.01 || s == 0.0 || !s.is_finite() {
+        format!("{s:.3}")
+    } else {
+        format!("{s:.2e}")
+    }
+}
+
+/// The columns of the table of `benches/strategies.rs` (those of
+/// [`super::time_error::STRATEGIES`] among them).
+pub const STRATEGY_COLUMNS: [&str; 10] = [
+    "blocks",
+    "dofs",
+    "strategy",
+    "tolerance",
+    "bracket",
+    "λ",
+    "error",
+    "iterations",
+    "numeric factorizations",
+    "wall time (s)",
+];
+
 /// The columns of the table of `dfem bench-solvers` (those [`super::time_error::SOLVERS`]
 /// draws among them).
 pub const SOLVER_COLUMNS: [&str; 9] = [
@@ -281,10 +302,10 @@ pub fn solvers(rows: &[crate::solve::bench::BenchRow]) -> Table {
         let total = r.setup_s + r.factor_s + r.solve_s;
         t.rows.push(vec![
             r.name.clone(),
-            format!("{:.3}", r.setup_s),
-            format!("{:.3}", r.factor_s),
-            format!("{:.3}", r.solve_s),
-            format!("{total:.3}"),
+            seconds(r.setup_s),
+            seconds(r.factor_s),
+            seconds(r.solve_s),
+            seconds(total),
             r.iterations.to_string(),
             num(r.factor_nnz),
             if r.memory_bytes == 0 {
@@ -336,6 +357,14 @@ mod tests {
         t.rows.push(vec!["mumps".into(), "2.2e-11".into()]);
         let doc = format!("# title\n\ntext | not a table\n\n{}\nafter\n", t.markdown());
         assert_eq!(Table::markdown_tables(&doc), vec![t]);
+    }
+
+    #[test]
+    fn seconds_keep_three_significant_digits_below_10_ms() {
+        assert_eq!(seconds(3.0474), "3.047");
+        assert_eq!(seconds(0.0123), "0.012");
+        assert_eq!(seconds(0.000_123_4), "1.23e-4");
+        assert_eq!(seconds(0.0), "0.000");
     }
 
     #[test]

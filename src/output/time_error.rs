@@ -11,7 +11,7 @@
 //! backend) cannot be placed on a log scale: it is left out and counted under the figure.
 
 use super::bench_table::{leading_number, Table};
-use super::figures::{draw_atomic, plot_err, Format};
+use super::figures::{create_figures_dir, draw_atomic, draw_legend, plot_err, Format};
 use crate::{Error, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -327,13 +327,7 @@ fn draw_on<DB: DrawingBackend>(
             markers(&mut chart, pts, shape, color, name)?;
         }
         let mine = plot.points.iter().filter(|p| &p.group == group);
-        chart
-            .configure_series_labels()
-            .position(legend_corner(mine, (x0, x1), (y0, y1)))
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e)?;
+        draw_legend(&mut chart, legend_corner(mine, (x0, x1), (y0, y1)))?;
     }
     root.present().map_err(e)?;
     Ok(())
@@ -397,11 +391,7 @@ pub fn write(
     plot: &Plot,
     formats: &[Format],
 ) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| {
-        Error::new(format!("cannot create the figures directory: {e}"))
-            .file(dir)
-            .fix("choose a writable directory")
-    })?;
+    create_figures_dir(dir)?;
     let stem = stem.map_or_else(|| plot.stem(), str::to_string);
     let mut written = Vec::new();
     for &f in formats {

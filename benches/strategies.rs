@@ -6,6 +6,7 @@
 //!                                        [--strategies initial,secant,newton]
 //!                                        [--tolerances 1e-4,1e-6] [--brackets 1e-2,1e-3,1e-4]
 //!                                        [--reference 1e-8,1e-5]
+//!                                        [--csv FILE] [--plot DIR]
 //!
 //! `--quick` runs the small walls only (10 × 10 and 30 × 30 blocks); the default adds the
 //! 100 × 100 wall (10⁴ blocks). For each wall the reference λ_ref is the tightest run
@@ -14,8 +15,14 @@
 //! so that a run longer than `--limit` seconds (default 600) is stopped and reported as
 //! such rather than holding up the table. The wall time is the driver's own
 //! (`Outcome.stats.wall_time_s`: the analysis, without parsing and meshing).
-//! Results are printed as a markdown table on stdout; progress goes to stderr.
+//! Results are printed as a markdown table on stdout; progress goes to stderr. `--csv FILE`
+//! also saves the table as CSV, and `--plot DIR` draws the wall time against the error, one
+//! series per strategy and one panel per wall, into `DIR/strategies_time_error.png` and
+//! `.svg` (`dfem::output::time_error`; `dfem plot FILE.csv` draws it again from the CSV).
 
+use dfem::output::bench_table::{markdown_line, Table, STRATEGY_COLUMNS};
+use dfem::output::figures::Format;
+use dfem::output::time_error;
 use std::io::Read;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -266,6 +273,7 @@ fn main() {
             .collect()
     };
     let (mut ref_tolerance, mut ref_bracket) = (REF_TOLERANCE, REF_BRACKET);
+    let (mut csv, mut plot): (Option<String>, Option<String>) = (None, None);
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -294,6 +302,8 @@ fn main() {
                 (ref_tolerance, ref_bracket) = (r[0], r[1]);
             }
             "--brackets" => brackets = list(it.next(), "--brackets"),
+            "--csv" => csv = Some(it.next().expect("--csv FILE").clone()),
+            "--plot" => plot = Some(it.next().expect("--plot DIR").clone()),
             "--strategies" => {
                 strategies = it
                     .next()
@@ -321,21 +331,24 @@ fn main() {
         "Each run is stopped after {:.0} s; wall time is the analysis only (no parsing/meshing).\n",
         limit.as_secs_f64()
     );
-    println!("| blocks | dofs | strategy | tolerance | bracket | λ | error | iterations | numeric factorizations | wall time (s) |");
-    println!("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|");
+    let mut table = Table::new(&STRATEGY_COLUMNS);
+    print!(
+        "{}",
+        table.markdown_header(&[true, true, false, true, true, true, true, true, true, true])
+    );
     let mut notes = Vec::new();
     for &n in &sizes {
         eprintln!("wall {n} x {n}: reference run ({REF_STRATEGY}, tol {ref_tolerance:e}, bracket {ref_bracket:e})");
         let reference = measure(n, n, REF_STRATEGY, ref_tolerance, ref_bracket, limit);
         let lref = reference.lambda;
         let mut runs = vec![(reference, true)];
-        print_row(&runs[0].0, lref, true);
+        table.rows.push(print_row(&runs[0].0, lref, true));
         for s in &strategies {
             for &tol in &tolerances {
                 for &br in &brackets {
                     eprintln!("wall {n} x {n}: {s}, tol {tol:e}, bracket {br:e}");
                     let r = measure(n, n, s, tol, br, limit);
-                    print_row(&r, lref, false);
+                    table.rows.push(print_row(&r, lref, false));
                     runs.push((r, false));
                 }
             }
@@ -371,9 +384,30 @@ fn main() {
             println!("* {n}");
         }
     }
+    if let Some(f) = csv {
+        table
+            .write_csv(std::path::Path::new(&f))
+            .unwrap_or_else(|e| panic!("{e}"));
+        eprintln!("table saved in {f}");
+    }
+    if let Some(d) = plot {
+        let fig =
+            time_error::Plot::new(&table, time_error::STRATEGIES).expect("the table's columns");
+        for f in time_error::write(
+            std::path::Path::new(&d),
+            None,
+            &fig,
+            &[Format::Png, Format::Svg],
+        )
+        .unwrap_or_else(|e| panic!("{e}"))
+        {
+            eprintln!("figure written: {}", f.display());
+        }
+    }
 }
 
-fn print_row(r: &Run, lref: Option<f64>, is_ref: bool) {
+/// Print the row of a run (markdown, as it comes) and return its cells.
+fn print_row(r: &Run, lref: Option<f64>, is_ref: bool) -> Vec<String> {
     let lam = r.lambda.map_or("–".to_string(), |l| format!("{l:.6}"));
     let err = if is_ref {
         "(reference)".to_string()
@@ -388,19 +422,20 @@ fn print_row(r: &Run, lref: Option<f64>, is_ref: bool) {
     } else {
         format!("{:.2}", r.wall_s)
     };
-    println!(
-        "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-        r.blocks,
-        r.dofs,
-        r.strategy,
+    let cells = vec![
+        r.blocks.to_string(),
+        r.dofs.to_string(),
+        r.strategy.clone(),
         fmt_sci(r.tolerance),
         fmt_sci(r.bracket),
         lam,
         err,
-        r.iterations,
-        r.factorizations,
-        wall
-    );
+        r.iterations.to_string(),
+        r.factorizations.to_string(),
+        wall,
+    ];
+    println!("{}", markdown_line(&cells));
+    cells
 }
 
 fn short(m: &str) -> String {

@@ -68,9 +68,10 @@ enum Command {
         #[arg(long, value_name = "MB")]
         memory_limit: Option<f64>,
     },
-    /// Draw the figures of a finished run again from the files in DIR.
+    /// Draw the figures of a finished run again from the files in DIR, or the run time
+    /// against error of a benchmark table saved with --csv (DIR is then FILE.csv).
     Plot {
-        /// The directory `dfem run --out DIR` wrote.
+        /// The directory `dfem run --out DIR` wrote, or a benchmark's FILE.csv.
         dir: PathBuf,
         /// Displacement amplification of the deformed figure (default: automatic).
         #[arg(long, value_name = "X")]
@@ -78,7 +79,7 @@ enum Command {
         /// Image format (default: both png and svg).
         #[arg(long, value_parser = ["png", "svg"])]
         format: Option<String>,
-        /// Where to write the figures (default: DIR/figures).
+        /// Where to write the figures (default: DIR/figures; for FILE.csv, its directory).
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -110,6 +111,13 @@ enum Command {
         petsc_options: Option<String>,
         #[arg(long)]
         threads: Option<usize>,
+        /// Also draw the run time against the true residual, one marker per backend, into
+        /// DIR/solvers_time_error.png and .svg.
+        #[arg(long, value_name = "DIR")]
+        plot: Option<PathBuf>,
+        /// Also save the table as CSV (redraw it with `dfem plot FILE.csv`).
+        #[arg(long, value_name = "FILE")]
+        csv: Option<PathBuf>,
     },
     /// Write the stiffness matrix at the first solve (and the load vector) in Matrix Market.
     ExportMatrix {
@@ -403,6 +411,18 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                 Some(f) => vec![f],
                 None => vec![Format::Png, Format::Svg],
             };
+            if dir.is_file() && dir.extension().is_some_and(|e| e == "csv") {
+                let fig_dir = out.unwrap_or_else(|| {
+                    dir.parent()
+                        .filter(|p| !p.as_os_str().is_empty())
+                        .unwrap_or(Path::new("."))
+                        .to_path_buf()
+                });
+                for w in output::time_error::redraw(&dir, &fig_dir, &formats)? {
+                    println!("{}", w.display());
+                }
+                return Ok(());
+            }
             let fig = output::figures::Deformed::from_dir(&dir)?;
             let curve = output::read::curve(&dir)?;
             let history = output::read::history(&dir)?;
@@ -490,6 +510,8 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             solvers,
             petsc_options,
             threads: n,
+            plot,
+            csv,
         } => {
             threads(n)?;
             let t0 = std::time::Instant::now();
@@ -526,7 +548,15 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                 t_model,
                 rayon::current_num_threads()
             );
-            print!("{}", solve::bench::table(&rows));
+            let table = output::bench_table::solvers(&rows);
+            print!("{}", table.markdown());
+            if let Some(f) = csv {
+                table.write_csv(&f)?;
+            }
+            if let Some(d) = plot {
+                let fig = output::time_error::Plot::new(&table, output::time_error::SOLVERS)?;
+                output::time_error::write(&d, None, &fig, &[Format::Png, Format::Svg])?;
+            }
             Ok(())
         }
         Command::ExportMatrix {

@@ -362,7 +362,7 @@ fn bbox(pts: impl Iterator<Item = [f64; 2]>) -> [f64; 4] {
     }
 }
 
-fn plot_err(path: &Path) -> impl Fn(String) -> Error + '_ {
+pub(crate) fn plot_err(path: &Path) -> impl Fn(String) -> Error + '_ {
     move |e| {
         Error::new(format!("cannot draw the figure: {e}"))
             .file(path)
@@ -813,16 +813,25 @@ fn draw_curve<DB: DrawingBackend>(
             .map_err(e)?
             .label(format!("last converged λ = {:.4}", last[0]))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e)?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
     }
     root.present().map_err(e)?;
     Ok(())
+}
+
+/// The legend of a chart as every figure draws it: at `pos`, in a white box with a black
+/// border that lets the grid show through a little.
+pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    pos: SeriesLabelPosition,
+) -> std::result::Result<(), String> {
+    chart
+        .configure_series_labels()
+        .position(pos)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| e.to_string())
 }
 
 /// The figure files written for `formats` into `dir` (created): deformed.* always,
@@ -836,11 +845,7 @@ pub fn write_figures(
     amplification: Option<f64>,
     formats: &[Format],
 ) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| {
-        Error::new(format!("cannot create the figures directory: {e}"))
-            .file(dir)
-            .fix("choose a writable output directory")
-    })?;
+    create_figures_dir(dir)?;
     let mut written = Vec::new();
     for &f in formats {
         let path = dir.join(format!("deformed.{}", f.extension()));
@@ -866,8 +871,17 @@ pub fn write_figures(
     Ok(written)
 }
 
+/// Create the directory of figures `dir` (and its parents).
+pub(crate) fn create_figures_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Error::new(format!("cannot create the figures directory: {e}"))
+            .file(dir)
+            .fix("choose a writable output directory")
+    })
+}
+
 /// Draw into a temporary file beside `path`, then rename: a figure is whole or absent.
-fn draw_atomic(path: &Path, draw: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+pub(crate) fn draw_atomic(path: &Path, draw: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())

@@ -2,9 +2,11 @@
 //! written to a temporary name in the same directory and renamed, so a reader never sees
 //! a half-written result.
 
+pub mod bench_table;
 pub mod figures;
 pub mod plot;
 pub mod read;
+pub mod time_error;
 pub mod time_history;
 pub mod vtk;
 

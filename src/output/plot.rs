@@ -113,13 +113,7 @@ fn draw_hoek_bray<DB: DrawingBackend>(
             .label(label)
             .legend(move |(x, y)| Circle::new((x, y), 4, color.filled()));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .draw()
-        .map_err(e)?;
+    super::figures::draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     root.present().map_err(e)?;
     Ok(())
 }

@@ -137,13 +137,7 @@ fn draw<DB: DrawingBackend>(
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e)?;
+        super::figures::draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     }
     root.present().map_err(e)?;
     Ok(())

@@ -22,6 +22,21 @@ pub fn dfem_bin() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_dfem"))
 }
 
+/// Run the `dfem` binary with `args`; panics with its stderr unless it succeeds. Returns
+/// its output.
+pub fn dfem_ok(args: &[&str]) -> std::process::Output {
+    let out = std::process::Command::new(dfem_bin())
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "dfem {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// A fresh empty directory under the target directory.
 pub fn tmp_dir(name: &str) -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);

@@ -15,13 +15,18 @@ fuzz_target!(|data: &[u8]| {
         0 => None,
         k => Some(0.05 * k as f64),
     };
-    let v: Vec<[f64; 2]> = data[1..]
+    let mut v: Vec<[f64; 2]> = data[1..]
         .chunks_exact(2)
         .take(40)
         .map(|c| [c[0] as f64 / 64.0, c[1] as f64 / 64.0])
         .collect();
     if check(&v, 1e-9).is_err() {
         return;
+    }
+    // the check accepts either orientation; the scene reader turns clockwise polygons
+    // counter-clockwise before meshing (src/scene/parse.rs), as the mesher requires
+    if signed_area(&v) < 0.0 {
+        v.reverse();
     }
     let area = signed_area(&v);
     let (interior, tris) = triangulate(&v, h);

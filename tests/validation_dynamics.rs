@@ -725,23 +725,77 @@ fn pseudo_dynamic_arch_fails_past_its_static_collapse_load() {
     assert!(fail_at[1] < fail_at[0], "{fail_at:?}");
 }
 
-/// With inertia, the seed's arch under Acc. No. 1 (HHT-α, Δt = 0.01 s, 2 s; the example
-/// `examples/seed_arch/acc1_inertia.toml`) runs through its collapse: the crown block
-/// falls by more than a metre (a result, not an error), with the energy balance closed
-/// to 5 % of the work of gravity and the ground motion through the first impacts
-/// (measured 1.7 %).
+/// With inertia, the seed's arch under Acc. No. 1 and No. 2 (HHT-α, Δt = 0.01 s, 10 s as
+/// in the seed's Fig. 6; the examples `examples/seed_arch/acc{1,2}_inertia.toml`, on a
+/// 30 m base) runs through its collapse to the end:
+/// * the arching action is lost: the crown block falls by more than a metre;
+/// * the falling voussoirs and pier blocks land on the base and on each other instead of
+///   passing through: no node ends more than two band thicknesses (2 × 5 mm) inside the
+///   base, none beyond its ends;
+/// * they come to rest: the kinetic energy at 10 s is below 10⁻³ of its peak;
+/// * the energy audit never shows energy made (E_error at most 2 % of the work of gravity
+///   and the ground motion done so far, at every step: measured ≤ 0.9 % with Δt = 0.005
+///   and 0.01 s) and the impacts dissipate less than 30 % of it by the end (measured
+///   −9.5 % and −24 %: the HHT-α scheme's loss at impacts resolved by step cuts).
+///
+/// The seed's Fig. 6b shows the right pier's top moving more under Acc. No. 1 than under
+/// No. 2 early on; with this arch (the seed does not give its dimensions) it is the
+/// other way round (13 against 52 mm at t = 1.5 s), so the test does not assert it.
 #[test]
-fn arch_with_inertia_collapses_under_acc_1() {
-    let (_, out) = common::solve(&common::scene(&seed_arch("acc1_inertia.toml")));
-    assert_eq!(out.status, Status::Stable, "{:?}", out.status);
-    let h = out.history.expect("history");
-    let uy = *col(&h, "v7.uy").last().unwrap();
-    assert!(uy < -1.0, "crown uy = {uy}");
-    let last = |c: &str| *col(&h, c).last().unwrap();
-    let work = last("W_gravity") + last("W_ground");
-    assert!(
-        last("E_error").abs() < 0.05 * work,
-        "energy error {} of {work} J",
-        last("E_error")
-    );
+fn arch_with_inertia_collapses_and_lands_under_acc_1_and_2() {
+    for file in ["acc1_inertia.toml", "acc2_inertia.toml"] {
+        let sc = common::scene(&seed_arch(file));
+        let (m, out) = common::solve(&sc);
+        assert_eq!(out.status, Status::Stable, "{file}: {:?}", out.status);
+        let h = out.history.expect("history");
+        let t = col(&h, "t");
+        assert!(
+            (t.last().unwrap() - 10.0).abs() < 1e-9,
+            "{file}: ends at {:?}",
+            t.last()
+        );
+        let last = |c: &str| *col(&h, c).last().unwrap();
+        assert!(last("v7.uy") < -1.0, "{file}: crown uy = {}", last("v7.uy"));
+        let band = 0.005;
+        for (b, block) in m.blocks.iter().enumerate() {
+            if block.dofs == dfem::mesh::BlockDofs::Fixed {
+                continue;
+            }
+            for n in block.nodes.clone() {
+                let (x, u) = (m.nodes[n as usize], out.node_disp[n as usize]);
+                let (xe, ye) = (x[0] + u[0], x[1] + u[1]);
+                assert!(
+                    ye > -2.0 * band && xe.abs() < 15.0,
+                    "{file}: block {b} node {n} ends at ({xe}, {ye})"
+                );
+            }
+        }
+        let ek = col(&h, "E_kinetic");
+        let peak = ek.iter().cloned().fold(0.0, f64::max);
+        assert!(
+            last("E_kinetic") < 1e-3 * peak,
+            "{file}: E_k {} of {peak}",
+            last("E_kinetic")
+        );
+        let (wg, wgr, err) = (
+            col(&h, "W_gravity"),
+            col(&h, "W_ground"),
+            col(&h, "E_error"),
+        );
+        for k in 0..t.len() {
+            let work = wg[k] + wgr[k];
+            assert!(
+                work < 1e3 || err[k] < 0.02 * work,
+                "{file}: at t = {} E_error {} of {work} J",
+                t[k],
+                err[k]
+            );
+        }
+        let work = last("W_gravity") + last("W_ground");
+        assert!(
+            last("E_error") > -0.3 * work,
+            "{file}: E_error {} of {work} J",
+            last("E_error")
+        );
+    }
 }

@@ -85,14 +85,17 @@ const OPEN_WEIGHT_DECAY: f64 = 0.1;
 /// voussoirs landing at 6 m/s on a band of 5 mm, see `Dynamics::too_fast`), reached only
 /// while they last (the step doubles back after each converged one).
 const MAX_CUTS: f64 = 12.0;
-/// Open/closed changes of a contact within a step after which it is held open for the
-/// rest of the step's iterations. A contact at the kink of its law (touching with a
+/// Open/closed changes of a contact within a step of the smallest length (`max_cuts`
+/// halvings) after which it is held open for the rest of the step's iterations. A contact at the kink of its law (touching with a
 /// force near zero) can make the iterations cycle whatever its spring in the matrix:
 /// closed, the step carries it open; open, the step carries it closed. Held open, the
 /// step's problem is smooth and converges; the contact ends the step with the normal
 /// gap it reached (a penetration of at most the band, else the step is cut,
 /// `Dynamics::too_fast`), which the next step starts from with its state re-evaluated.
 const FREEZE_FLIPS: u32 = 6;
+/// Penetration (fraction of the band thickness) a contact held open may end a step with
+/// before the step is cut, and the most a new contact starts with.
+const HELD_PENETRATION: f64 = 0.1;
 /// Step lengths tried by the line search of a step's iterations: 1, 1/2, …, 1/8.
 const LINE_SEARCH_STEPS: usize = 4;
 
@@ -660,9 +663,15 @@ impl<'a> Dynamics<'a> {
                 );
             }
             // the band's force at the gap: the remembered opening of an open contact, or
-            // the elastic compression of one found already within the band
+            // the elastic compression of one found already within the band, at most that
+            // of a tenth of the band: a vertex found deeper (it came past the end of an
+            // edge, or out of the shadow of a contact dropped since) would start with
+            // the elastic energy ½ kₙ gap² that no work paid for (the arch: 1.8 MJ from
+            // a vertex found 4 cm inside its neighbour); the rest of the overlap is
+            // left, and the contact resists any further approach
             let kn = self.law.springs(f.contact.length * t).kn;
-            self.committed.force.push([kn * f.gap, 0.0]);
+            let gap = f.gap.max(-HELD_PENETRATION * band);
+            self.committed.force.push([kn * gap, 0.0]);
             self.committed.state.push(if f.gap > 0.0 {
                 ContactState::Open
             } else {
@@ -894,8 +903,9 @@ impl<'a> Dynamics<'a> {
     }
 
     /// Try one step of length h from the committed state; `None` when it does not
-    /// converge (the caller cuts it).
-    fn step(&mut self, h: f64) -> Result<Option<Accepted>> {
+    /// converge (the caller cuts it). `last_resort`: the step cannot be cut further, and
+    /// contacts that cycle are held open ([`FREEZE_FLIPS`]).
+    fn step(&mut self, h: f64, last_resort: bool) -> Result<Option<Accepted>> {
         let s = self.settings.scheme;
         let inertia = self.settings.inertia;
         // without inertia: backward Euler, v₁ = Δu/h, the balance taken at t₁
@@ -966,7 +976,10 @@ impl<'a> Dynamics<'a> {
                         1.0
                     };
                 }
-                if flips[k] >= FREEZE_FLIPS && !frozen[k] {
+                if last_resort && flips[k] >= FREEZE_FLIPS && !frozen[k] {
+                    if std::env::var_os("DFEM_TRACE").is_some() {
+                        eprintln!("  hold open: contact {k}");
+                    }
                     frozen[k] = true;
                     self.stats.held_open += 1;
                 }
@@ -1214,8 +1227,15 @@ impl<'a> Dynamics<'a> {
     fn too_fast(&self, acc: &Accepted) -> bool {
         let band = self.law.elastic.band;
         (0..acc.trial.state.len()).any(|k| {
-            (acc.trial.state[k] != ContactState::Open || acc.frozen[k])
-                && -acc.trial.rel[k][0] > band
+            let d = acc.trial.rel[k][0];
+            if acc.frozen[k] {
+                // held open: the gap it ends with, Fₙ₀/kₙ + Δδₙ, becomes elastic energy
+                // ½ kₙ δ² next step that no work paid for: a tenth of the band at most
+                let kn = self.springs[k].kn;
+                kn > 0.0 && self.committed.force[k][0] / kn + d < -HELD_PENETRATION * band
+            } else {
+                acc.trial.state[k] != ContactState::Open && -d > band
+            }
         })
     }
 
@@ -1226,7 +1246,8 @@ impl<'a> Dynamics<'a> {
         let mut h = target - self.time;
         while self.time < target - 1e-9 * self.settings.dt {
             h = h.min(target - self.time);
-            let mut accepted = self.step(h)?;
+            let last_resort = h <= hmin * (1.0 + 1e-9);
+            let mut accepted = self.step(h, last_resort)?;
             let mut saved = None;
             if let Some(released) = accepted.as_ref().and_then(|acc| self.released(acc)) {
                 // contacts that carried force at the start let go within the step: their
@@ -1237,14 +1258,21 @@ impl<'a> Dynamics<'a> {
                 // its base bounced higher than it fell). The step is redone from the
                 // start's acceleration and internal force without them.
                 let start = (self.a.clone(), self.f_int.clone());
+                if std::env::var_os("DFEM_TRACE").is_some() {
+                    let k: Vec<usize> = (0..released.len()).filter(|&k| released[k]).collect();
+                    eprintln!("  release redo: contacts {k:?}");
+                }
                 self.release(&released);
-                accepted = self.step(h)?;
+                accepted = self.step(h, last_resort)?;
                 saved = Some(start);
             }
             let cut = match &accepted {
                 None => true,
                 // an impact the step cannot resolve: cut it (see `too_fast`)
                 Some(acc) if h > hmin * (1.0 + 1e-9) && self.too_fast(acc) => {
+                    if std::env::var_os("DFEM_TRACE").is_some() {
+                        eprintln!("  impact cut");
+                    }
                     self.stats.impact_cuts += 1;
                     true
                 }
@@ -1268,6 +1296,12 @@ impl<'a> Dynamics<'a> {
                         .map(|s| *s == ContactState::Open)
                         .collect();
                     self.commit(acc);
+                    if std::env::var_os("DFEM_TRACE").is_some() {
+                        eprintln!(
+                            "  commit t {:.6} h {h:.3e} E_k {:.4e} E_el {:.4e}",
+                            self.time, self.energy.kinetic, self.energy.elastic
+                        );
+                    }
                     let switched = before
                         .iter()
                         .zip(&self.committed.state)
@@ -1300,8 +1334,9 @@ impl<'a> Dynamics<'a> {
             .committed
             .state
             .iter()
-            .zip(&acc.trial.state)
-            .map(|(s0, s1)| *s0 != ContactState::Open && *s1 == ContactState::Open)
+            .zip(acc.trial.state.iter().zip(&acc.frozen))
+            // not a contact held open after cycling (at the kink, not letting go)
+            .map(|(s0, (s1, f))| *s0 != ContactState::Open && *s1 == ContactState::Open && !f)
             .collect();
         (self.settings.reset_on_impact && self.settings.inertia && released.contains(&true))
             .then_some(released)

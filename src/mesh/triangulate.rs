@@ -107,6 +107,8 @@ pub fn triangulate(ring: &[Point], h: Option<f64>) -> (Vec<Point>, Vec<[u32; 3]>
             tris.push(t);
         }
     }
+    let pts: Vec<Point> = ring.iter().chain(&interior).copied().collect();
+    repair_slivers(&pts, &mut tris);
     // drop interior points no triangle uses (refinement outside the polygon)
     let mut used = vec![false; n + interior.len()];
     for t in &tris {
@@ -128,6 +130,69 @@ pub fn triangulate(ring: &[Point], h: Option<f64>) -> (Vec<Point>, Vec<[u32; 3]>
         }
     }
     (kept, tris)
+}
+
+/// Twice the signed area (m²) of triangle `t` of `pts`.
+fn area2(pts: &[Point], t: [u32; 3]) -> f64 {
+    let [a, b, c] = t.map(|k| pts[k as usize]);
+    cross(sub(b, a), sub(c, a))
+}
+
+/// Replace the triangles of zero area in the true coordinates. Three ring vertices that
+/// are collinear only up to the round-off of the centring (a vertex lying on the line
+/// through two others, e.g. (0, 0), (1.984375, 1.984375), (2.25, 2.25)) can make the
+/// triangulator close a face that has no area in the input's coordinates: a CST with
+/// no stiffness. Such a sliver (a, m, b), m between a and b, shares its long edge a–b with
+/// a neighbour (b, a, x) inside the polygon (a–b is not a ring edge: m lies on it); the
+/// pair is replaced by (a, m, x) and (m, b, x), which cover the same area and keep the
+/// mesh conforming. (Found by the `mesher` fuzz target.)
+fn repair_slivers(pts: &[Point], tris: &mut Vec<[u32; 3]>) {
+    let b = crate::geometry::polygon::bbox(pts);
+    let tiny = 1e-12 * ((b[2] - b[0]).powi(2) + (b[3] - b[1]).powi(2));
+    // each repair removes one sliver and adds none with a positive-area neighbour
+    for _ in 0..tris.len() {
+        let Some(s) = tris.iter().position(|&t| area2(pts, t).abs() <= tiny) else {
+            return;
+        };
+        let t = tris[s];
+        // the long edge: the one opposite the middle vertex
+        let len = |i: usize, j: usize| norm(sub(pts[t[i] as usize], pts[t[j] as usize]));
+        let k = (0..3)
+            .max_by(|&i, &j| {
+                len((i + 1) % 3, (i + 2) % 3).total_cmp(&len((j + 1) % 3, (j + 2) % 3))
+            })
+            .expect("three edges");
+        let (m, a, bb) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+        let neighbour = tris
+            .iter()
+            .enumerate()
+            .position(|(q, u)| q != s && u.contains(&a) && u.contains(&bb));
+        match neighbour {
+            Some(q) => {
+                let u = tris[q];
+                let x = *u
+                    .iter()
+                    .find(|&&v| v != a && v != bb)
+                    .expect("a third vertex");
+                let orient = |t: [u32; 3]| {
+                    if area2(pts, t) < 0.0 {
+                        [t[0], t[2], t[1]]
+                    } else {
+                        t
+                    }
+                };
+                let (first, second) = (orient([a, m, x]), orient([m, bb, x]));
+                let (hi, lo) = (s.max(q), s.min(q));
+                tris.swap_remove(hi);
+                tris.swap_remove(lo);
+                tris.push(first);
+                tris.push(second);
+            }
+            None => {
+                tris.swap_remove(s);
+            }
+        }
+    }
 }
 
 /// Points of an equilateral lattice of spacing `h` inside the polygon, at least 0.45 h
@@ -167,6 +232,37 @@ fn distance_to_ring(ring: &[Point], p: Point) -> f64 {
 
 #[cfg(test)]
 mod tests {
+
+    /// The polygon the `mesher` fuzz target found (input `KJCQBQAAAH9/DwsA`, oriented
+    /// counter-clockwise): vertices 1, 2 and 4 lie on the line y = x, and the
+    /// triangulation of the centred coordinates closed them into a face of zero area.
+    #[test]
+    fn collinear_ring_vertices_give_no_zero_area_triangle() {
+        let mut v: Vec<Point> = [
+            (0x90, 0x90),
+            (0x05, 0x00),
+            (0x00, 0x00),
+            (0x7f, 0x7f),
+            (0x0f, 0x0b),
+        ]
+        .iter()
+        .map(|&(x, y)| [x as f64 / 64.0, y as f64 / 64.0])
+        .collect();
+        if crate::geometry::polygon::signed_area(&v) < 0.0 {
+            v.reverse();
+        }
+        let area = crate::geometry::polygon::signed_area(&v);
+        let (interior, tris) = triangulate(&v, None);
+        let pts: Vec<Point> = v.iter().chain(&interior).copied().collect();
+        let mut sum = 0.0;
+        for t in &tris {
+            let a = 0.5 * area2(&pts, *t);
+            assert!(a > 0.0, "triangle {t:?} of area {a:e}");
+            sum += a;
+        }
+        assert!((sum - area).abs() <= 1e-12 * area, "{sum} against {area}");
+    }
+
     use super::*;
     use crate::geometry::polygon::signed_area;
 

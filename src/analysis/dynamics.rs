@@ -73,6 +73,7 @@ pub const KEYS: &[&str] = &[
     "initial",
     "impact_reset",
     "inertia",
+    "adaptive_tolerance",
 ];
 
 /// Open/closed changes of a contact within a step after which its normal spring stays
@@ -163,6 +164,10 @@ pub struct Settings {
     /// analysis (its §4.2 end, §4.3): C u̇ + F_int(u) = F(t), integrated by backward
     /// Euler, the ground motion entering only through the body force −M ι a_g(t).
     pub inertia: bool,
+    /// Error-controlled step (`adaptive_tolerance`, m): the largest local error of a
+    /// step's node displacements allowed ([`Dynamics::step_error`]); `None`: steps of
+    /// `dt` cut only when they do not converge or jump over an impact.
+    pub adaptive: Option<f64>,
 }
 
 impl Settings {
@@ -223,6 +228,10 @@ impl Settings {
                         .place(place("inertia"))
                         .fix("inertia = true (default: M ü kept) or false (pseudo-dynamic: C u̇ + F_int = F(t))")
                 })?,
+            },
+            adaptive: match x.get("adaptive_tolerance") {
+                None => None,
+                Some(_) => Some(num("adaptive_tolerance", 1e-6, 1e-15, 1.0)?),
             },
             reset_on_impact: match x.get("impact_reset") {
                 None => true,
@@ -1239,6 +1248,36 @@ impl<'a> Dynamics<'a> {
         })
     }
 
+    /// The local error (m) of a converged step of length h: the largest node displacement
+    /// of the Newmark family's local truncation error e = h² (β − 1/6) (a₁ − a₀)
+    /// (Zienkiewicz and Xie 1991, the difference between the step's displacement and a
+    /// third-order Taylor expansion), over all nodes. Zero without inertia.
+    fn step_error(&self, acc: &Accepted, h: f64) -> f64 {
+        if !self.settings.inertia {
+            return 0.0;
+        }
+        let c = h * h * (self.settings.scheme.beta - 1.0 / 6.0);
+        let e: Vec<f64> = acc
+            .a
+            .iter()
+            .zip(&self.a)
+            .map(|(a1, a0)| c * (a1 - a0))
+            .collect();
+        (0..self.cur.nodes.len() as u32)
+            .map(|n| {
+                let d = self.cur.node_displacement(n, &e);
+                d[0].hypot(d[1])
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// Whether an error-controlled step's local error exceeds `adaptive_tolerance`.
+    fn too_inaccurate(&self, acc: &Accepted, h: f64) -> bool {
+        self.settings
+            .adaptive
+            .is_some_and(|tol| self.step_error(acc, h) > tol)
+    }
+
     /// Advance to time `target` (s), cutting the step when it does not converge.
     /// Returns false when even the smallest step fails.
     fn advance_to(&mut self, target: f64) -> Result<bool> {
@@ -1276,6 +1315,10 @@ impl<'a> Dynamics<'a> {
                     self.stats.impact_cuts += 1;
                     true
                 }
+                Some(acc) if h > hmin * (1.0 + 1e-9) && self.too_inaccurate(acc, h) => {
+                    self.stats.error_cuts += 1;
+                    true
+                }
                 Some(_) => false,
             };
             if cut {
@@ -1295,6 +1338,12 @@ impl<'a> Dynamics<'a> {
                         .iter()
                         .map(|s| *s == ContactState::Open)
                         .collect();
+                    // an error-controlled step grows only where the doubled step would
+                    // stay within the tolerance (the local error grows as h³)
+                    let grow = self
+                        .settings
+                        .adaptive
+                        .is_none_or(|tol| self.step_error(&acc, h) < tol / 8.0);
                     self.commit(acc);
                     if std::env::var_os("DFEM_TRACE").is_some() {
                         eprintln!(
@@ -1313,7 +1362,9 @@ impl<'a> Dynamics<'a> {
                     {
                         self.filtered_acceleration();
                     }
-                    h *= 2.0;
+                    if grow {
+                        h *= 2.0;
+                    }
                 }
                 None => {
                     if h <= hmin * (1.0 + 1e-9) {

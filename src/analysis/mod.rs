@@ -61,6 +61,9 @@ pub struct Stats {
     /// Contacts of a dynamic run held open for the rest of a time step after cycling
     /// between open and closed in its iterations.
     pub held_open: usize,
+    /// Converged time steps cut because their local error exceeded
+    /// `adaptive_tolerance`.
+    pub error_cuts: usize,
     pub wall_time_s: f64,
     pub min_pivot_ratio: f64,
     /// Stored entries of the last factor of the linear backend (its memory is 8 bytes
@@ -337,4 +340,19 @@ pub fn outcome_motion(mesh: &Mesh, block: usize, out: &Outcome) -> ([f64; 2], f6
         block,
         &out.node_disp[b.nodes.start as usize..b.nodes.end as usize],
     )
+}
+
+#[cfg(test)]
+mod tests {
+    /// Every `[analysis]` key a driver reads is one the scene reader accepts (a key
+    /// missing there is refused as unknown before the driver sees it).
+    #[test]
+    fn drivers_read_only_keys_the_scene_reader_accepts() {
+        for k in super::statics::KEYS.iter().chain(super::dynamics::KEYS) {
+            assert!(
+                crate::scene::parse::ANALYSIS_KEYS.contains(k),
+                "'{k}' is not in scene::parse::ANALYSIS_KEYS"
+            );
+        }
+    }
 }

@@ -118,6 +118,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "tangent_fallbacks": s.tangent_fallbacks,
             "impact_cuts": s.impact_cuts,
             "held_open": s.held_open,
+            "error_cuts": s.error_cuts,
             "min_pivot_ratio": s.min_pivot_ratio,
             "factor_nnz": s.factor_nnz,
             "peak_memory_mb": s.peak_memory_mb,

@@ -119,8 +119,10 @@ struct RawOutput {
     checkpoint_every: Option<i64>,
 }
 
-/// Keys of `[analysis]` (the drivers of later analysis types read the rest from `extra`).
-const ANALYSIS_KEYS: &[&str] = &[
+/// Keys of `[analysis]` (the drivers of later analysis types read the rest from `extra`;
+/// their own lists, `analysis::statics::KEYS` and `analysis::dynamics::KEYS`, are checked
+/// against this one by a test in `analysis`).
+pub const ANALYSIS_KEYS: &[&str] = &[
     "type",
     "lateral",
     "load_steps",
@@ -142,6 +144,7 @@ const ANALYSIS_KEYS: &[&str] = &[
     "initial",
     "impact_reset",
     "inertia",
+    "adaptive_tolerance",
 ];
 
 /// Read and validate a scene file.

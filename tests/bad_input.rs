@@ -101,6 +101,7 @@ cases! {
     far_apart_unsupported,
     friction_90,
     generate_missing_material,
+    generate_ten_million_blocks,
     generate_unknown_type,
     import_dxf_arc,
     import_dxf_bad_number,

@@ -434,8 +434,6 @@ impl<'a> Driver<'a> {
         // the best out-of-balance norm so far and the iteration that set it
         let mut best_rn = f64::INFINITY;
         let mut best_it = 0;
-        // secant only: tangent steps from here on, after the secant iterations stalled
-        let mut tangent_only = false;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
             let r: Vec<f64> = f_ext.iter().zip(&trial.f_int).map(|(a, b)| a - b).collect();
@@ -482,18 +480,8 @@ impl<'a> Driver<'a> {
                 best_rn = rn;
                 best_it = it;
             } else if it - best_it >= STALL_ITERATIONS {
-                if self.settings.strategy == Strategy::Secant && !tangent_only {
-                    // the secant iterations stagnate, which they also do below the limit
-                    // load on large walls (docs/performance.md, "100×100 wall": stuck at
-                    // 3.3e-4 where Newton converges): go on with tangent steps before
-                    // declaring the load beyond what the contacts can hold
-                    tangent_only = true;
-                    self.stats.tangent_fallbacks += 1;
-                    best_it = it;
-                } else {
-                    // stagnation: the load is beyond what the contacts can hold from here
-                    break;
-                }
+                // stagnation: the load is beyond what the contacts can hold from here
+                break;
             }
             prev_state = trial.state.clone();
             prev_force = trial.force.clone();
@@ -503,7 +491,6 @@ impl<'a> Driver<'a> {
             // secant iterations then contract by a constant factor, ~0.7 on the walls of
             // docs/performance.md; the tangent step closes them in one or two)
             let tangent = self.settings.strategy == Strategy::Newton
-                || tangent_only
                 || (self.settings.strategy == Strategy::Secant
                     && it > 1
                     && !changed

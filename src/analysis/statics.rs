@@ -12,7 +12,7 @@ use super::progress::{Increment, Progress};
 use super::{Outcome, Stats, Status};
 use crate::assembly::{loads, LocalStiffness, System};
 use crate::geometry::polygon::Point;
-use crate::material::{ContactLaw, ContactState, MohrCoulomb};
+use crate::material::{ContactLaw, ContactState, JointLaw};
 use crate::mesh::Mesh;
 use crate::scene::{AnalysisType, Scene};
 use crate::solve::LinearBackend;
@@ -120,7 +120,7 @@ pub struct Driver<'a> {
     scene: &'a Scene,
     settings: Settings,
     system: System,
-    law: MohrCoulomb,
+    law: JointLaw,
     area: Vec<f64>,
     cur: Mesh,
     committed: Committed,
@@ -213,7 +213,7 @@ impl<'a> Driver<'a> {
     ) -> Result<Driver<'a>> {
         let settings = Settings::from_scene(scene)?;
         let system = System::new(scene, mesh);
-        let law = MohrCoulomb::from_joint(
+        let law = JointLaw::from_joint(
             &scene.joints[scene
                 .contacts
                 .joint
@@ -270,7 +270,7 @@ impl<'a> Driver<'a> {
                     ContactState::Slip if newton => {
                         // Fₛ = ±(cA − Fₙ tan φ): ∂Fₛ/∂δₙ = ∓ tan φ kₙ
                         let sg = trial.force[k][1].signum();
-                        [[s.kn, 0.0], [-sg * self.law.tan_phi * s.kn, 0.0]]
+                        [[s.kn, 0.0], [-sg * self.law.tan_phi() * s.kn, 0.0]]
                     }
                     ContactState::Slip => [[s.kn, 0.0], [0.0, 0.0]],
                 }
@@ -409,7 +409,7 @@ impl<'a> Driver<'a> {
             // elastic predictor of a prescribed motion: the free blocks' elastic response to
             // it, so that the iterations start near the answer rather than from the
             // friction limit of slipping contacts
-            let elastic = crate::material::ElasticBand { ..self.law.elastic };
+            let elastic = self.law.elastic();
             let t = evaluate(
                 &self.system,
                 &self.cur,
@@ -656,6 +656,7 @@ impl<'a> Driver<'a> {
         self.committed.stress = trial.stress;
         self.committed.force = trial.force;
         self.committed.state = trial.state;
+        self.committed.history = trial.history;
         self.cur = trial.mesh;
         for (t, p) in self.presc_total.iter_mut().zip(presc) {
             t[0] += p[0];

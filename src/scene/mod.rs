@@ -76,6 +76,22 @@ pub struct Joint {
     pub cohesion: f64,
     /// Tensile strength fₜ, Pa.
     pub tensile_strength: f64,
+    /// Softening of fₜ and c (`softening`; docs/theory.md, "Softening joints").
+    pub softening: JointSoftening,
+    /// Mode-I fracture energy G_f^I, N/m (softening joints).
+    pub fracture_energy_i: f64,
+    /// Mode-II fracture energy G_f^II, N/m (softening joints).
+    pub fracture_energy_ii: f64,
+}
+
+/// `[[joint]] softening`: how the tensile strength and the cohesion degrade.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum JointSoftening {
+    /// Constant strengths (the Mohr–Coulomb band of METHOD.md §3).
+    #[default]
+    None,
+    /// Exponential softening governed by the fracture energies (Lourenço and Rots 1997).
+    Exponential,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -68,6 +68,9 @@ struct RawJoint {
     friction_angle: Option<f64>,
     cohesion: Option<f64>,
     tensile_strength: Option<f64>,
+    softening: Option<String>,
+    fracture_energy_i: Option<f64>,
+    fracture_energy_ii: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -392,6 +395,53 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
                 ))
             }
         };
+        let cohesion = opt("cohesion", j.cohesion, "Pa")?;
+        let tensile_strength = opt("tensile_strength", j.tensile_strength, "Pa")?;
+        let softening = match j.softening.as_deref() {
+            None | Some("none") => JointSoftening::None,
+            Some("exponential") => JointSoftening::Exponential,
+            Some(other) => {
+                return Err(err_at(
+                    src.key_line(at, "softening"),
+                    format!("{place} key 'softening'"),
+                    format!("unknown softening \"{other}\""),
+                    "use \"exponential\" (or \"none\", the default)",
+                ))
+            }
+        };
+        let (fracture_energy_i, fracture_energy_ii) = if softening == JointSoftening::None {
+            if let Some(key) = [
+                ("fracture_energy_i", j.fracture_energy_i),
+                ("fracture_energy_ii", j.fracture_energy_ii),
+            ]
+            .iter()
+            .find_map(|(k, v)| v.map(|_| *k))
+            {
+                return Err(err_at(
+                    src.key_line(at, key),
+                    format!("{place} key '{key}'"),
+                    "a fracture energy is given but the joint does not soften",
+                    "add softening = \"exponential\" to the joint, or remove the key",
+                ));
+            }
+            (0.0, 0.0)
+        } else {
+            let gf1 = need("fracture_energy_i", j.fracture_energy_i, "N/m")?;
+            let gf2 = need("fracture_energy_ii", j.fracture_energy_ii, "N/m")?;
+            let tan_phi = friction_angle.to_radians().tan();
+            if tensile_strength * tan_phi > cohesion * (1.0 + 1e-12) {
+                return Err(err_at(
+                    src.key_line(at, "tensile_strength"),
+                    format!("{place} key 'tensile_strength'"),
+                    format!(
+                        "the tension cut-off fₜ = {tensile_strength} Pa lies beyond the apex of the Coulomb line (c / tan φ = {} Pa)",
+                        cohesion / tan_phi
+                    ),
+                    "a softening joint needs tensile_strength ≤ cohesion / tan(friction_angle): lower the tensile strength or raise the cohesion",
+                ));
+            }
+            (gf1, gf2)
+        };
         joints.push(Joint {
             name,
             normal_modulus,
@@ -400,8 +450,11 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
             shear_viscosity: opt("shear_viscosity", j.shear_viscosity, "Pa·s")?,
             band,
             friction_angle,
-            cohesion: opt("cohesion", j.cohesion, "Pa")?,
-            tensile_strength: opt("tensile_strength", j.tensile_strength, "Pa")?,
+            cohesion,
+            tensile_strength,
+            softening,
+            fracture_energy_i,
+            fracture_energy_ii,
         });
     }
 

@@ -134,12 +134,21 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
 /// The text of `curve.csv`: header `load_factor,ux_m,uy_m`, one row per converged state of
 /// the capacity search (the first one after gravity, at λ = 0).
 pub fn curve_csv(curve: &crate::analysis::curve::Curve) -> String {
-    let mut s = String::from("load_factor,ux_m,uy_m\n");
+    let push = curve.points.iter().any(|p| p.reaction.is_some());
+    let mut s = String::from(if push {
+        "load_factor,ux_m,uy_m,force_x_N,force_y_N,moment_Nm\n"
+    } else {
+        "load_factor,ux_m,uy_m\n"
+    });
     for p in &curve.points {
         s.push_str(&format!(
-            "{},{:e},{:e}\n",
+            "{},{:e},{:e}",
             p.load_factor, p.displacement[0], p.displacement[1]
         ));
+        if let Some(r) = p.reaction.filter(|_| push) {
+            s.push_str(&format!(",{:e},{:e},{:e}", r[0], r[1], r[2]));
+        }
+        s.push('\n');
     }
     s
 }

@@ -138,6 +138,8 @@ const ANALYSIS_KEYS: &[&str] = &[
     "initial_step",
     "bracket",
     "line_search",
+    "push_block",
+    "push_displacement",
     "integrator",
     "alpha",
     "rho_inf",

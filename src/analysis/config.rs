@@ -5,7 +5,7 @@
 
 use crate::assembly::{cst_b, System};
 use crate::geometry::polygon::{sub, Point};
-use crate::material::{ContactLaw, ContactState};
+use crate::material::{ContactLaws, ContactState};
 use crate::mesh::{BlockDofs, Mesh};
 use dfem_kernels::CONSTRAINED;
 
@@ -20,7 +20,7 @@ pub struct Committed {
     /// Total unknowns since the start (m, rad): rigid blocks' centroid displacement and
     /// rotation, deformable nodes' displacement.
     pub u: Vec<f64>,
-    /// History variable of each contact's law ([`ContactLaw::update_history`]; the spent
+    /// History variable of each contact's law ([`crate::material::ContactLaw::update_history`]; the spent
     /// fraction ξ of the fracture energy of a softening joint, 0 for a new contact). A
     /// contact past the end of this list (one a driver added without it) has 0.
     pub history: Vec<f64>,
@@ -125,7 +125,7 @@ pub fn evaluate(
     system: &System,
     cur: &Mesh,
     committed: &Committed,
-    law: &dyn ContactLaw,
+    law: &dyn ContactLaws,
     area: &[f64],
     thickness: f64,
     dq: &[f64],
@@ -190,7 +190,7 @@ pub fn evaluate(
                 -n0[1] * rel[0] + n0[0] * rel[1],
             ];
             let h = committed.history.get(k).copied().unwrap_or(0.0);
-            let (f, st, h) = law.update_history(area[k], committed.force[k], h, d);
+            let (f, st, h) = law.law(k).update_history(area[k], committed.force[k], h, d);
             (f, st, d, h)
         })
         .collect();

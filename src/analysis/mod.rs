@@ -161,6 +161,14 @@ pub fn run_with(
         }
     }
     if scene.analysis.kind == AnalysisType::Dynamic {
+        if let Some(joint) = scene.joints.iter().find(|j| !j.blocks.is_empty()) {
+            return Err(Error::new(format!(
+                "joint '{}' is given to some blocks, and the dynamic analysis gives every contact the [contacts] joint",
+                joint.name
+            ))
+            .place(format!("joint '{}' key 'blocks'", joint.name))
+            .fix("remove the key 'blocks' for a dynamic run, or run a static or capacity analysis"));
+        }
         let j = scene.contacts.joint;
         if let Some(joint) = scene.joints.get(j) {
             if joint.softening != crate::scene::JointSoftening::None {

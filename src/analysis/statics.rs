@@ -12,7 +12,7 @@ use super::progress::{Increment, Progress};
 use super::{Outcome, Stats, Status};
 use crate::assembly::{loads, LocalStiffness, System};
 use crate::geometry::polygon::Point;
-use crate::material::{ContactLaw, ContactState, JointLaw};
+use crate::material::{ContactLaw, ContactState, JointLaw, PerContact};
 use crate::mesh::Mesh;
 use crate::scene::{AnalysisType, Scene};
 use crate::solve::LinearBackend;
@@ -209,7 +209,8 @@ pub struct Driver<'a> {
     scene: &'a Scene,
     settings: Settings,
     system: System,
-    law: JointLaw,
+    /// The law of each contact (its joint's, `Scene::joint_of`).
+    law: PerContact<JointLaw>,
     area: Vec<f64>,
     cur: Mesh,
     committed: Committed,
@@ -308,12 +309,14 @@ impl<'a> Driver<'a> {
     ) -> Result<Driver<'a>> {
         let settings = Settings::from_scene(scene)?;
         let system = System::new(scene, mesh);
-        let law = JointLaw::from_joint(
-            &scene.joints[scene
+        let law = PerContact {
+            laws: scene.joints.iter().map(JointLaw::from_joint).collect(),
+            of: mesh
                 .contacts
-                .joint
-                .min(scene.joints.len().saturating_sub(1))],
-        );
+                .iter()
+                .map(|c| scene.joint_of(c.block_l as usize, c.block_m as usize) as u32)
+                .collect(),
+        };
         let t = scene.model.thickness;
         let area = mesh.contacts.iter().map(|c| c.length * t).collect();
         let kbuf = CsrMatrix::zeros(system.plan.pattern().clone());
@@ -360,14 +363,15 @@ impl<'a> Driver<'a> {
     fn local_stiffness(&self, trial: &Trial, newton: bool) -> Vec<LocalStiffness> {
         (0..self.area.len())
             .map(|k| {
-                let s = self.law.springs(self.area[k]);
+                let law = self.law.get(k);
+                let s = law.springs(self.area[k]);
                 match trial.state[k] {
                     ContactState::Stick => [[s.kn, 0.0], [0.0, s.ks]],
                     ContactState::Open => [[0.0, 0.0], [0.0, 0.0]],
                     ContactState::Slip if newton => {
                         // Fₛ = ±(cA − Fₙ tan φ): ∂Fₛ/∂δₙ = ∓ tan φ kₙ
                         let sg = trial.force[k][1].signum();
-                        [[s.kn, 0.0], [-sg * self.law.tan_phi() * s.kn, 0.0]]
+                        [[s.kn, 0.0], [-sg * law.tan_phi() * s.kn, 0.0]]
                     }
                     ContactState::Slip => [[s.kn, 0.0], [0.0, 0.0]],
                 }
@@ -378,7 +382,8 @@ impl<'a> Driver<'a> {
     fn elastic_local(&self) -> Vec<LocalStiffness> {
         self.area
             .iter()
-            .map(|&a| crate::assembly::diagonal(self.law.springs(a)))
+            .enumerate()
+            .map(|(k, &a)| crate::assembly::diagonal(self.law.get(k).springs(a)))
             .collect()
     }
 
@@ -569,7 +574,10 @@ impl<'a> Driver<'a> {
             // elastic predictor of a prescribed motion: the free blocks' elastic response to
             // it, so that the iterations start near the answer rather than from the
             // friction limit of slipping contacts
-            let elastic = self.law.elastic();
+            let elastic = PerContact {
+                laws: self.law.laws.iter().map(JointLaw::elastic).collect(),
+                of: self.law.of.clone(),
+            };
             let t = evaluate(
                 &self.system,
                 &self.cur,

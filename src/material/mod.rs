@@ -104,6 +104,39 @@ pub trait ContactLaw: Sync + Send {
     }
 }
 
+/// The contact law of each contact of a model: one law for all ([`ContactLaw`] types
+/// serve as their own), or one per contact ([`PerContact`]).
+pub trait ContactLaws: Sync + Send {
+    /// The law of contact `k`.
+    fn law(&self, k: usize) -> &dyn ContactLaw;
+}
+
+impl<T: ContactLaw> ContactLaws for T {
+    fn law(&self, _k: usize) -> &dyn ContactLaw {
+        self
+    }
+}
+
+/// A law per contact: `laws[of[k]]` for contact k.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PerContact<L> {
+    pub laws: Vec<L>,
+    pub of: Vec<u32>,
+}
+
+impl<L: ContactLaw> ContactLaws for PerContact<L> {
+    fn law(&self, k: usize) -> &dyn ContactLaw {
+        &self.laws[self.of[k] as usize]
+    }
+}
+
+impl<L> PerContact<L> {
+    /// The law of contact `k`, as its own type.
+    pub fn get(&self, k: usize) -> &L {
+        &self.laws[self.of[k] as usize]
+    }
+}
+
 /// The law of a `[[joint]]`: Mohr–Coulomb with tension cut-off (METHOD.md §3), or with
 /// softening of the tensile strength and the cohesion (`softening = "exponential"`,
 /// [`Softening`]).

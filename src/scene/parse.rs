@@ -71,6 +71,7 @@ struct RawJoint {
     softening: Option<String>,
     fracture_energy_i: Option<f64>,
     fracture_energy_ii: Option<f64>,
+    blocks: Option<Vec<String>>,
 }
 
 #[derive(Deserialize)]
@@ -339,6 +340,8 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
 
     // [[joint]]
     let mut joints: Vec<Joint> = Vec::new();
+    // per joint: where it stands and the names of its `blocks`, resolved after the blocks
+    let mut joint_blocks: Vec<(usize, String, Vec<String>)> = Vec::new();
     for (i, j) in raw.joint.iter().enumerate() {
         let at = j.span().start;
         let j = j.get_ref();
@@ -457,7 +460,9 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
             softening,
             fracture_energy_i,
             fracture_energy_ii,
+            blocks: Vec::new(),
         });
+        joint_blocks.push((at, place.clone(), j.blocks.clone().unwrap_or_default()));
     }
 
     let material_index = |name: &str, line: usize, place: &str| -> Result<usize> {
@@ -705,6 +710,20 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
                     format!("the name is already used by the block at line {}", blocks[j].line.unwrap_or(1)),
                     "give every block a different name (set `name` on [[generate]] entries to prefix them)"));
             }
+        }
+    }
+
+    for (j, (at, place, names)) in joint_blocks.iter().enumerate() {
+        for name in names {
+            let b = blocks.iter().position(|b| &b.name == name).ok_or_else(|| {
+                err_at(
+                    src.key_line(*at, "blocks"),
+                    format!("{place} key 'blocks'"),
+                    format!("there is no block '{name}'"),
+                    "name blocks of the scene (generated walls call their base \"base\" and their top beam \"top\")",
+                )
+            })?;
+            joints[j].blocks.push(b);
         }
     }
 

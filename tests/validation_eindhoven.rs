@@ -60,7 +60,10 @@ fn eindhoven_wall_030_peaks_softens_and_ends_in_friction() {
         r_end[1] / 1e3
     );
     assert!(imax + 1 < pts.len(), "no peak within 4 mm");
-    assert!(end < 0.9 * peak, "no softening branch: {end} N after {peak} N");
+    assert!(
+        end < 0.9 * peak,
+        "no softening branch: {end} N after {peak} N"
+    );
 
     // residual friction on the sliding bed joint
     let p = 0.30e6 * 0.99 * 0.1;

@@ -124,7 +124,11 @@ fn pull(mesh_size: Option<f64>) -> (usize, f64, f64) {
         .iter()
         .map(|p| (p[3] - AREA * pull_stress(p[1])).abs())
         .fold(0.0, f64::max);
-    (mesh.contacts.len(), work(pts.iter().map(|p| [p[1], p[3]])), dev)
+    (
+        mesh.contacts.len(),
+        work(pts.iter().map(|p| [p[1], p[3]])),
+        dev,
+    )
 }
 
 #[test]
@@ -132,12 +136,18 @@ fn pulled_joint_follows_the_exponential_and_dissipates_gf1_whatever_the_mesh() {
     let coarse = pull(None);
     let fine = pull(Some(0.02));
     eprintln!("pull: (contacts, work J, force error N) {coarse:?} {fine:?}");
-    assert!(fine.0 > coarse.0, "the finer mesh has more contacts: {fine:?} {coarse:?}");
+    assert!(
+        fine.0 > coarse.0,
+        "the finer mesh has more contacts: {fine:?} {coarse:?}"
+    );
     let g = GF1 * AREA;
     for (contacts, w, dev) in [coarse, fine] {
         // the return is exact along the path and the increments converge to 1e-6 of the
         // force: 1e-4 of the peak force fₜ A is far above both
-        assert!(dev < 1e-4 * FT * AREA, "{contacts} contacts: force off by {dev} N");
+        assert!(
+            dev < 1e-4 * FT * AREA,
+            "{contacts} contacts: force off by {dev} N"
+        );
         // trapezoid rule with 2.5 µm steps on a decay length G/fₜ = 72 µm:
         // ~(2.5/72)²/12 = 1e-4; the tail left at 1 mm is exp(−1000/72) ≈ 1e-6
         assert!(
@@ -152,8 +162,8 @@ fn pulled_joint_follows_the_exponential_and_dissipates_gf1_whatever_the_mesh() {
 #[test]
 fn sheared_joint_softens_to_friction_and_dissipates_gf2() {
     let sigma = -0.30e6; // the lowest Eindhoven pre-compression, Pa
-    // 4 mm in 400 increments of 10 µm: decay length G_f^II/c = 357 µm, trapezoid error
-    // ~(10/357)²/12 = 7e-5; the tail left exp(−4000/357) ≈ 1.4e-5
+                         // 4 mm in 400 increments of 10 µm: decay length G_f^II/c = 357 µm, trapezoid error
+                         // ~(10/357)²/12 = 7e-5; the tail left exp(−4000/357) ≈ 1.4e-5
     let steps = 400;
     let sc = common::scene(&scene(None, sigma * AREA, "4e-3", steps));
     let (_, out) = common::solve(&sc);
@@ -166,12 +176,21 @@ fn sheared_joint_softens_to_friction_and_dissipates_gf2() {
     // (c − σ tan φ) A = 11.5 kN; the peak is reached within a step past the elastic limit
     // (the cohesion falls by exp(−10 µm/357 µm) = 3 % over a step at most)
     let p0 = (C + TAN_PHI * -sigma) * AREA;
-    assert!((peak - p0).abs() < 0.03 * p0, "peak {peak} N against {p0} N");
-    assert!((end - friction).abs() < 1e-3 * friction, "end {end} N against {friction} N");
+    assert!(
+        (peak - p0).abs() < 0.03 * p0,
+        "peak {peak} N against {p0} N"
+    );
+    assert!(
+        (end - friction).abs() < 1e-3 * friction,
+        "end {end} N against {friction} N"
+    );
     // the block stays on the joint: its vertical reaction is nil (the compression is a
     // load) and the contacts carry σ A
     let normal: f64 = out.contact_forces.iter().map(|f| f[0]).sum();
-    assert!((normal - sigma * AREA).abs() < 1e-4 * n, "normal force {normal}");
+    assert!(
+        (normal - sigma * AREA).abs() < 1e-4 * n,
+        "normal force {normal}"
+    );
     // energy balance: the work of the pushing force is the elastic energy left in the
     // joint, H²/(2 kₛ A), plus friction × the slip u − H/(kₛ A), plus what the cohesion
     // dissipated
@@ -182,5 +201,8 @@ fn sheared_joint_softens_to_friction_and_dissipates_gf2() {
         - friction * (last[0] - last[2] / ks);
     let g = GF2 * AREA;
     eprintln!("shear: peak {peak} N, end {end} N, cohesive work {w} J");
-    assert!((w - g).abs() < 0.01 * g, "work beyond friction {w} J against {g} J");
+    assert!(
+        (w - g).abs() < 0.01 * g,
+        "work beyond friction {w} J against {g} J"
+    );
 }

@@ -400,26 +400,28 @@ impl<'a> Driver<'a> {
             pinned[d] = true;
         }
         let pattern = k.pattern.clone();
-        let (rp, ci) = (pattern.row_ptr(), pattern.col_idx());
-        let mut diag_sum = 0.0;
-        for i in 0..n {
-            for e in rp[i]..rp[i + 1] {
-                if ci[e] as usize == i {
-                    diag_sum += k.values[e].abs();
-                }
-            }
-        }
+        let rp = pattern.row_ptr();
+        // row of every stored entry, in storage order
+        let rows: Vec<usize> = (0..n)
+            .flat_map(|i| std::iter::repeat_n(i, rp[i + 1] - rp[i]))
+            .collect();
+        let ci = pattern.col_idx();
+        let diag_sum: f64 = rows
+            .iter()
+            .zip(ci)
+            .zip(&k.values)
+            .filter(|((i, j), _)| **i == **j as usize)
+            .map(|(_, v)| v.abs())
+            .sum();
         let mean = (diag_sum / n.max(1) as f64).max(1e-300);
-        for i in 0..n {
-            for e in rp[i]..rp[i + 1] {
-                let j = ci[e] as usize;
-                if j == i {
-                    if pinned[i] && k.values[e] <= 0.0 {
-                        k.values[e] = mean;
-                    }
-                } else if pinned[i] || pinned[j] {
-                    k.values[e] = 0.0;
+        for ((&i, &j), v) in rows.iter().zip(ci).zip(k.values.iter_mut()) {
+            let j = j as usize;
+            if i == j {
+                if pinned[i] && *v <= 0.0 {
+                    *v = mean;
                 }
+            } else if pinned[i] || pinned[j] {
+                *v = 0.0;
             }
         }
     }
@@ -932,7 +934,12 @@ impl<'a> Driver<'a> {
     }
 
     /// A point of the displacement-controlled curve at the phase's factor `s`.
-    fn push_point(&self, block: usize, s: f64, reaction: Option<[f64; 3]>) -> super::curve::CurvePoint {
+    fn push_point(
+        &self,
+        block: usize,
+        s: f64,
+        reaction: Option<[f64; 3]>,
+    ) -> super::curve::CurvePoint {
         super::curve::CurvePoint {
             load_factor: s,
             displacement: super::curve::control_displacement(

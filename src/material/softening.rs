@@ -211,7 +211,12 @@ mod tests {
                 opened = true;
                 let expected = 0.25e6 * (-0.25e6 * up / 18.0).exp();
                 // the bisection returns s′ to 2⁻⁶⁰; round-off of the sum of u_p
-                assert!((g[0] - expected).abs() <= 1e-9 * 0.25e6, "{} {}", g[0], expected);
+                assert!(
+                    (g[0] - expected).abs() <= 1e-9 * 0.25e6,
+                    "{} {}",
+                    g[0],
+                    expected
+                );
             }
             f = g;
             xi = x;
@@ -246,12 +251,20 @@ mod tests {
             up += dup;
             if st == ContactState::Slip {
                 let expected = 0.35e6 * (-0.35e6 * up / 125.0).exp() - sigma * 0.75;
-                assert!((g[1] - expected).abs() <= 1e-9 * 0.35e6, "{} {}", g[1], expected);
+                assert!(
+                    (g[1] - expected).abs() <= 1e-9 * 0.35e6,
+                    "{} {}",
+                    g[1],
+                    expected
+                );
             }
             f = g;
             xi = x;
         }
-        assert!((f[1] + sigma * 0.75).abs() < 1e-3 * 0.35e6, "residual friction");
+        assert!(
+            (f[1] + sigma * 0.75).abs() < 1e-3 * 0.35e6,
+            "residual friction"
+        );
         // decay length G/c = 357 µm, steps of 1 µm: trapezoid error ~1e-6; the tail
         // exp(−8000/357) ≈ 2e-10
         assert!((work - 125.0).abs() < 1e-4 * 125.0, "work {work}");

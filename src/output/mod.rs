@@ -164,7 +164,12 @@ pub fn write_figures(
     formats: &[figures::Format],
 ) -> Result<Vec<std::path::PathBuf>> {
     let fig = figures::Deformed::from_run(scene, mesh, out);
-    let rows: Option<Vec<[f64; 3]>> = out.capacity_curve.as_ref().map(|c| {
+    // a displacement-controlled run's curve is not drawn (its load is a force, not λ)
+    let capacity = out
+        .capacity_curve
+        .as_ref()
+        .filter(|c| c.points.iter().all(|p| p.reaction.is_none()));
+    let rows: Option<Vec<[f64; 3]>> = capacity.map(|c| {
         c.points
             .iter()
             .map(|p| [p.load_factor, p.displacement[0], p.displacement[1]])

@@ -90,6 +90,8 @@ fn every_file_has_a_test() {
 }
 
 cases! {
+    softening_without_fracture_energy,
+    tension_cut_off_beyond_apex,
     all_fixed,
     checkpoint_every_zero,
     degenerate_collinear,

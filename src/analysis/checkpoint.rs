@@ -5,7 +5,7 @@
 //!
 //! The state is what [`crate::analysis::dynamics::Dynamics`] carries from one step to the
 //! next: the current (updated Lagrangian) configuration with its contact set, the
-//! committed stresses, contact forces and states, the total unknowns u, the velocity v
+//! committed stresses, contact forces, states and history variables, the total unknowns u, the velocity v
 //! and acceleration a, the internal and damping forces of the committed state, the energy
 //! sums, the time and the counters. Everything else (masses, loads, matrices and their
 //! pattern) is rebuilt from the scene and that configuration.
@@ -27,7 +27,7 @@ use std::path::Path;
 pub const FILE: &str = "checkpoint.bin";
 const MAGIC: &[u8; 8] = b"DFEMCKPT";
 /// Version of the format; a file of another version is refused.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// The state of a dynamic run after `step` completed time steps.
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -1,6 +1,7 @@
 //! The capacity curve: the load factor λ against the displacement of a control point, one
 //! point per converged increment of the capacity search (written to `curve.csv` and drawn
-//! as `figures/capacity_curve.*`).
+//! as `figures/capacity_curve.*`); under displacement control, the pushed block's
+//! displacement and the force that holds it.
 
 use crate::mesh::{BlockDofs, Mesh};
 
@@ -11,6 +12,10 @@ pub struct CurvePoint {
     pub load_factor: f64,
     /// Displacement of the control block's centroid (m), total since the start.
     pub displacement: [f64; 2],
+    /// Displacement control (`[analysis] push_block`): the horizontal and vertical
+    /// forces (N) and the moment (N·m) that hold the pushed block on its path; `None` for
+    /// a capacity curve.
+    pub reaction: Option<[f64; 3]>,
 }
 
 /// The capacity curve of a run.

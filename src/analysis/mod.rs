@@ -160,6 +160,27 @@ pub fn run_with(
             .fix("place the blocks on a fixed block (support = \"fixed\"), or raise [contacts] tolerance if they should touch"));
         }
     }
+    if scene.analysis.kind == AnalysisType::Dynamic {
+        if let Some(joint) = scene.joints.iter().find(|j| !j.blocks.is_empty()) {
+            return Err(Error::new(format!(
+                "joint '{}' is given to some blocks, and the dynamic analysis gives every contact the [contacts] joint",
+                joint.name
+            ))
+            .place(format!("joint '{}' key 'blocks'", joint.name))
+            .fix("remove the key 'blocks' for a dynamic run, or run a static or capacity analysis"));
+        }
+        let j = scene.contacts.joint;
+        if let Some(joint) = scene.joints.get(j) {
+            if joint.softening != crate::scene::JointSoftening::None {
+                return Err(Error::new(format!(
+                    "joint '{}' softens, and the dynamic analysis does not follow the softening of joints",
+                    joint.name
+                ))
+                .place(format!("joint '{}' key 'softening'", joint.name))
+                .fix("run a static or capacity analysis with this joint, or remove softening (and the fracture energies) for a dynamic run"));
+            }
+        }
+    }
     let mut out = match scene.analysis.kind {
         AnalysisType::Static | AnalysisType::Capacity => {
             statics::run_with_progress(scene, mesh, backend, progress)

@@ -12,7 +12,7 @@ use super::progress::{Increment, Progress};
 use super::{Outcome, Stats, Status};
 use crate::assembly::{loads, LocalStiffness, System};
 use crate::geometry::polygon::Point;
-use crate::material::{ContactLaw, ContactState, MohrCoulomb};
+use crate::material::{ContactLaw, ContactState, JointLaw, PerContact};
 use crate::mesh::Mesh;
 use crate::scene::{AnalysisType, Scene};
 use crate::solve::LinearBackend;
@@ -57,6 +57,87 @@ pub struct Settings {
     pub initial_step: f64,
     pub bracket: f64,
     pub line_search: bool,
+    /// Displacement control (`push_block`, `push_displacement`), if any.
+    pub push: Option<Push>,
+}
+
+/// Displacement control of a static analysis: after gravity and the loads, the rigid
+/// block `block` is moved by `displacement` in `load_steps` equal increments with its
+/// rotation held (its top stays horizontal); its vertical motion is prescribed too when
+/// `vertical` is given, else free under the loads (a constant pre-compression). The force
+/// that holds the block on this path (N) is the load of the capacity curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Push {
+    pub block: usize,
+    /// Horizontal displacement (m).
+    pub horizontal: f64,
+    /// Vertical displacement (m); `None`: free.
+    pub vertical: Option<f64>,
+}
+
+impl Push {
+    fn from_scene(scene: &Scene) -> Result<Option<Push>> {
+        let x = &scene.analysis.extra;
+        let place = super::analysis_place;
+        let (name, disp) = match (x.get("push_block"), x.get("push_displacement")) {
+            (None, None) => return Ok(None),
+            (Some(b), Some(d)) => (b, d),
+            (Some(_), None) => {
+                return Err(Error::new("push_block is given without push_displacement")
+                    .place(place("push_block"))
+                    .fix("add push_displacement = <m> (horizontal, vertical free) or [<m>, <m>]"))
+            }
+            (None, Some(_)) => {
+                return Err(Error::new("push_displacement is given without push_block")
+                    .place(place("push_displacement"))
+                    .fix("add push_block = \"<name of the free rigid block to push>\""))
+            }
+        };
+        let name = name.as_str().ok_or_else(|| {
+            Error::new("push_block is not a block name")
+                .place(place("push_block"))
+                .fix("give the name of a block as a string, for example \"top\"")
+        })?;
+        let block = scene.block_index(name).ok_or_else(|| {
+            Error::new(format!("there is no block '{name}'"))
+                .place(place("push_block"))
+                .fix("name a block of the scene (generated walls call their top beam \"top\")")
+        })?;
+        let b = &scene.blocks[block];
+        if b.support != crate::scene::Support::Free || b.kind != crate::scene::BlockKind::Rigid {
+            return Err(Error::new(format!("block '{name}' is not a free rigid block"))
+                .place(place("push_block"))
+                .line(b.line)
+                .fix("push a free block of kind = \"rigid\" (a loading beam); fixed blocks move with their 'prescribed' key"));
+        }
+        let num = |v: &toml::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+        let bad = || {
+            Error::new("push_displacement is not a displacement")
+                .place(place("push_displacement"))
+                .fix("give a finite number of m (horizontal; the vertical motion free) or [horizontal, vertical] in m")
+        };
+        let (horizontal, vertical) = match disp {
+            toml::Value::Array(a) if a.len() == 2 => {
+                let h = num(&a[0]).ok_or_else(bad)?;
+                let v = num(&a[1]).ok_or_else(bad)?;
+                (h, Some(v))
+            }
+            v => (num(v).ok_or_else(bad)?, None),
+        };
+        if !horizontal.is_finite() || !vertical.unwrap_or(0.0).is_finite() {
+            return Err(bad());
+        }
+        if scene.analysis.kind != AnalysisType::Static {
+            return Err(Error::new("displacement control belongs to a static analysis")
+                .place(place("push_block"))
+                .fix("set [analysis] type = \"static\" (the capacity analysis raises a load factor instead)"));
+        }
+        Ok(Some(Push {
+            block,
+            horizontal,
+            vertical,
+        }))
+    }
 }
 
 impl Settings {
@@ -88,6 +169,7 @@ impl Settings {
                 .get("line_search")
                 .and_then(|v| v.as_bool())
                 .unwrap_or(strategy != Strategy::Initial),
+            push: Push::from_scene(scene)?,
         })
     }
 }
@@ -104,6 +186,8 @@ pub const KEYS: &[&str] = &[
     "initial_step",
     "bracket",
     "line_search",
+    "push_block",
+    "push_displacement",
 ];
 
 /// The loads of one phase as functions of its load factor.
@@ -113,6 +197,11 @@ struct Phase {
     step: Vec<f64>,
     /// Prescribed translation increment of each block per unit factor (m).
     presc_step: Vec<Point>,
+    /// Prescribed increments of single unknowns per unit factor: (unknown, m or rad).
+    pin_step: Vec<(usize, f64)>,
+    /// Displacement control: the pushed block, whose displacement and reaction are
+    /// recorded after every converged increment.
+    record: Option<usize>,
 }
 
 /// The nonlinear model being analysed.
@@ -120,7 +209,8 @@ pub struct Driver<'a> {
     scene: &'a Scene,
     settings: Settings,
     system: System,
-    law: MohrCoulomb,
+    /// The law of each contact (its joint's, `Scene::joint_of`).
+    law: PerContact<JointLaw>,
     area: Vec<f64>,
     cur: Mesh,
     committed: Committed,
@@ -138,6 +228,12 @@ pub struct Driver<'a> {
     /// Where progress is reported (none: silent), and the state of the report.
     progress: Option<&'a mut dyn Progress>,
     report: Report,
+    /// Unknowns whose increments are prescribed in the current increment, with the
+    /// increments (m, rad): their rows and columns are taken out of the solves and their
+    /// out-of-balance forces are reactions.
+    pins: Vec<(usize, f64)>,
+    /// The curve of the displacement-controlled phase so far.
+    push_curve: Vec<super::curve::CurvePoint>,
 }
 
 /// What the progress report needs between calls.
@@ -213,12 +309,14 @@ impl<'a> Driver<'a> {
     ) -> Result<Driver<'a>> {
         let settings = Settings::from_scene(scene)?;
         let system = System::new(scene, mesh);
-        let law = MohrCoulomb::from_joint(
-            &scene.joints[scene
+        let law = PerContact {
+            laws: scene.joints.iter().map(JointLaw::from_joint).collect(),
+            of: mesh
                 .contacts
-                .joint
-                .min(scene.joints.len().saturating_sub(1))],
-        );
+                .iter()
+                .map(|c| scene.joint_of(c.block_l as usize, c.block_m as usize) as u32)
+                .collect(),
+        };
         let t = scene.model.thickness;
         let area = mesh.contacts.iter().map(|c| c.length * t).collect();
         let kbuf = CsrMatrix::zeros(system.plan.pattern().clone());
@@ -244,6 +342,8 @@ impl<'a> Driver<'a> {
             presc_total: vec![[0.0; 2]; mesh.blocks.len()],
             progress: None,
             report: Report::default(),
+            pins: Vec::new(),
+            push_curve: Vec::new(),
         })
     }
 
@@ -263,14 +363,15 @@ impl<'a> Driver<'a> {
     fn local_stiffness(&self, trial: &Trial, newton: bool) -> Vec<LocalStiffness> {
         (0..self.area.len())
             .map(|k| {
-                let s = self.law.springs(self.area[k]);
+                let law = self.law.get(k);
+                let s = law.springs(self.area[k]);
                 match trial.state[k] {
                     ContactState::Stick => [[s.kn, 0.0], [0.0, s.ks]],
                     ContactState::Open => [[0.0, 0.0], [0.0, 0.0]],
                     ContactState::Slip if newton => {
                         // Fₛ = ±(cA − Fₙ tan φ): ∂Fₛ/∂δₙ = ∓ tan φ kₙ
                         let sg = trial.force[k][1].signum();
-                        [[s.kn, 0.0], [-sg * self.law.tan_phi * s.kn, 0.0]]
+                        [[s.kn, 0.0], [-sg * law.tan_phi() * s.kn, 0.0]]
                     }
                     ContactState::Slip => [[s.kn, 0.0], [0.0, 0.0]],
                 }
@@ -281,8 +382,68 @@ impl<'a> Driver<'a> {
     fn elastic_local(&self) -> Vec<LocalStiffness> {
         self.area
             .iter()
-            .map(|&a| crate::assembly::diagonal(self.law.springs(a)))
+            .enumerate()
+            .map(|(k, &a)| crate::assembly::diagonal(self.law.get(k).springs(a)))
             .collect()
+    }
+
+    /// Take the pinned unknowns out of `k`: their rows and columns are zeroed but for the
+    /// diagonal (kept, or the mean diagonal where it is not positive), so that a solve
+    /// leaves them unchanged when their right-hand side is zero.
+    fn pin_rows(pins: &[(usize, f64)], k: &mut CsrMatrix) {
+        if pins.is_empty() {
+            return;
+        }
+        let n = k.pattern.n();
+        let mut pinned = vec![false; n];
+        for &(d, _) in pins {
+            pinned[d] = true;
+        }
+        let pattern = k.pattern.clone();
+        let rp = pattern.row_ptr();
+        // row of every stored entry, in storage order
+        let rows: Vec<usize> = (0..n)
+            .flat_map(|i| std::iter::repeat_n(i, rp[i + 1] - rp[i]))
+            .collect();
+        let ci = pattern.col_idx();
+        let diag_sum: f64 = rows
+            .iter()
+            .zip(ci)
+            .zip(&k.values)
+            .filter(|((i, j), _)| **i == **j as usize)
+            .map(|(_, v)| v.abs())
+            .sum();
+        let mean = (diag_sum / n.max(1) as f64).max(1e-300);
+        for ((&i, &j), v) in rows.iter().zip(ci).zip(k.values.iter_mut()) {
+            let j = j as usize;
+            if i == j {
+                if pinned[i] && *v <= 0.0 {
+                    *v = mean;
+                }
+            } else if pinned[i] || pinned[j] {
+                *v = 0.0;
+            }
+        }
+    }
+
+    /// The out-of-balance force f_ext − f_int (N), zero at pinned unknowns (where it is
+    /// the reaction).
+    fn out_of_balance(&self, f_ext: &[f64], f_int: &[f64]) -> Vec<f64> {
+        let mut r: Vec<f64> = f_ext.iter().zip(f_int).map(|(a, b)| a - b).collect();
+        for &(d, _) in &self.pins {
+            r[d] = 0.0;
+        }
+        r
+    }
+
+    /// The force that measures the out-of-balance force: the external force on the free
+    /// unknowns and the reactions at the pinned ones (N).
+    fn force_scale(&self, f_ext: &[f64], f_int: &[f64]) -> f64 {
+        let mut s2: f64 = f_ext.iter().map(|x| x * x).sum();
+        for &(d, _) in &self.pins {
+            s2 += f_int[d] * f_int[d] - f_ext[d] * f_ext[d];
+        }
+        s2.max(0.0).sqrt().max(1e-300)
     }
 
     /// Solve with the elastic stiffness of the initial configuration (factorized once).
@@ -291,6 +452,7 @@ impl<'a> Driver<'a> {
             let local = self.elastic_local();
             let mut k = CsrMatrix::zeros(self.system.plan.pattern().clone());
             self.system.stiffness_into(&self.cur, &local, &mut k);
+            Self::pin_rows(&self.pins, &mut k);
             let ok = self.backend.factorize(&k).is_ok() && !super::singular_pivots(&*self.backend);
             self.held = Held::K0;
             if !ok {
@@ -311,6 +473,7 @@ impl<'a> Driver<'a> {
                 let local = self.local_stiffness(trial, newton);
                 self.system
                     .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+                Self::pin_rows(&self.pins, &mut self.kbuf);
                 if !newton {
                     if let Some(x) = self.reuse(trial, r) {
                         return Ok(Some(x));
@@ -385,6 +548,7 @@ impl<'a> Driver<'a> {
         for (a, b) in self.kbuf.values.iter_mut().zip(&k0.values) {
             *a += eps * b;
         }
+        Self::pin_rows(&self.pins, &mut self.kbuf);
         self.held = Held::Nothing;
         let mut x = r.to_vec();
         let ok = self.backend.factorize(&self.kbuf).is_ok()
@@ -405,11 +569,17 @@ impl<'a> Driver<'a> {
     ) -> Result<std::result::Result<Trial, (IncrementFailure, Failure)>> {
         let n = self.cur.n_dofs;
         let mut dq = vec![0.0; n];
-        if presc.iter().any(|p| *p != [0.0, 0.0]) {
+        for &(d, v) in &self.pins {
+            dq[d] = v;
+        }
+        if presc.iter().any(|p| *p != [0.0, 0.0]) || self.pins.iter().any(|p| p.1 != 0.0) {
             // elastic predictor of a prescribed motion: the free blocks' elastic response to
             // it, so that the iterations start near the answer rather than from the
             // friction limit of slipping contacts
-            let elastic = crate::material::ElasticBand { ..self.law.elastic };
+            let elastic = PerContact {
+                laws: self.law.laws.iter().map(JointLaw::elastic).collect(),
+                of: self.law.of.clone(),
+            };
             let t = evaluate(
                 &self.system,
                 &self.cur,
@@ -420,13 +590,15 @@ impl<'a> Driver<'a> {
                 &dq,
                 presc,
             );
-            let mut x: Vec<f64> = f_ext.iter().zip(&t.f_int).map(|(a, b)| a - b).collect();
+            let mut x = self.out_of_balance(f_ext, &t.f_int);
             if self.solve_k0(&mut x)? {
-                dq = x;
+                for (a, b) in dq.iter_mut().zip(&x) {
+                    *a += b;
+                }
             }
         }
         let mut trial = self.trial(&dq, presc);
-        let scale = Self::norm(f_ext).max(1e-300);
+        let mut scale = self.force_scale(f_ext, &trial.f_int);
         let size = self.model_size();
         let mut prev_state = trial.state.clone();
         let mut prev_force = trial.force.clone();
@@ -436,7 +608,10 @@ impl<'a> Driver<'a> {
         let mut best_it = 0;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
-            let r: Vec<f64> = f_ext.iter().zip(&trial.f_int).map(|(a, b)| a - b).collect();
+            let r = self.out_of_balance(f_ext, &trial.f_int);
+            if !self.pins.is_empty() {
+                scale = self.force_scale(f_ext, &trial.f_int);
+            }
             let rn = Self::norm(&r);
             if let Some(p) = self.progress.as_deref_mut() {
                 p.iteration(it, rn / scale);
@@ -530,6 +705,7 @@ impl<'a> Driver<'a> {
                 let local = self.local_stiffness(&trial, false);
                 self.system
                     .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+                Self::pin_rows(&self.pins, &mut self.kbuf);
                 let mut x = r.clone();
                 let ok = self.backend.factorize(&self.kbuf).is_ok()
                     && !super::singular_pivots(&*self.backend)
@@ -559,7 +735,7 @@ impl<'a> Driver<'a> {
                 )));
             }
         }
-        let r: Vec<f64> = f_ext.iter().zip(&trial.f_int).map(|(a, b)| a - b).collect();
+        let r = self.out_of_balance(f_ext, &trial.f_int);
         let residual = Self::norm(&r) / scale;
         // the mechanism: the null space of the secant matrix when it is singular, else
         // the increment itself
@@ -613,13 +789,7 @@ impl<'a> Driver<'a> {
         for _ in 0..if self.settings.line_search { 4 } else { 1 } {
             let cand: Vec<f64> = dq.iter().zip(delta).map(|(a, b)| a + alpha * b).collect();
             let t = self.trial(&cand, presc);
-            let rn2 = Self::norm(
-                &f_ext
-                    .iter()
-                    .zip(&t.f_int)
-                    .map(|(a, b)| a - b)
-                    .collect::<Vec<_>>(),
-            );
+            let rn2 = Self::norm(&self.out_of_balance(f_ext, &t.f_int));
             if best.as_ref().is_none_or(|b| rn2 < b.0) {
                 best = Some((rn2, t, cand));
             }
@@ -643,6 +813,7 @@ impl<'a> Driver<'a> {
         self.committed.stress = trial.stress;
         self.committed.force = trial.force;
         self.committed.state = trial.state;
+        self.committed.history = trial.history;
         self.cur = trial.mesh;
         for (t, p) in self.presc_total.iter_mut().zip(presc) {
             t[0] += p[0];
@@ -684,6 +855,14 @@ impl<'a> Driver<'a> {
         let mut s = 0.0;
         let mut ds = 1.0 / steps as f64;
         let mut cuts = 0;
+        if !phase.pin_step.is_empty() || !self.pins.is_empty() {
+            // the held factorizations were computed with other unknowns pinned
+            self.held = Held::Nothing;
+        }
+        if let Some(b) = phase.record {
+            let p = self.push_point(b, 0.0, None);
+            self.push_curve.push(p);
+        }
         while s < 1.0 - 1e-12 {
             let target = (s + ds).min(1.0);
             let f: Vec<f64> = phase
@@ -697,12 +876,22 @@ impl<'a> Driver<'a> {
                 .iter()
                 .map(|p| [p[0] * (target - s), p[1] * (target - s)])
                 .collect();
+            self.pins = phase
+                .pin_step
+                .iter()
+                .map(|&(d, v)| (d, v * (target - s)))
+                .collect();
             match self.increment(&f, &presc)? {
                 Ok(trial) => {
                     let dq = trial.dq.clone();
+                    let reaction = phase.record.map(|b| self.reaction(b, &trial.f_int, &f));
                     self.commit(trial, &dq, &presc);
                     s = target;
                     self.converged(s);
+                    if let Some(b) = phase.record {
+                        let p = self.push_point(b, s, reaction);
+                        self.push_curve.push(p);
+                    }
                 }
                 Err((why, dq)) => {
                     self.failure_mode = Some(dq);
@@ -714,7 +903,40 @@ impl<'a> Driver<'a> {
                 }
             }
         }
+        self.pins.clear();
         Ok((1.0, None))
+    }
+
+    /// The forces (N, horizontal and vertical) and moment (N·m) that hold the rigid block
+    /// `block` on its prescribed path: the internal minus the external force at its
+    /// unknowns (the vertical one is zero up to the tolerance when it moves freely).
+    fn reaction(&self, block: usize, f_int: &[f64], f_ext: &[f64]) -> [f64; 3] {
+        match self.cur.blocks[block].dofs {
+            crate::mesh::BlockDofs::Rigid { first, .. } => {
+                let f = first as usize;
+                [0, 1, 2].map(|i| f_int[f + i] - f_ext[f + i])
+            }
+            _ => [0.0; 3],
+        }
+    }
+
+    /// A point of the displacement-controlled curve at the phase's factor `s`.
+    fn push_point(
+        &self,
+        block: usize,
+        s: f64,
+        reaction: Option<[f64; 3]>,
+    ) -> super::curve::CurvePoint {
+        super::curve::CurvePoint {
+            load_factor: s,
+            displacement: super::curve::control_displacement(
+                &self.cur,
+                &self.cur,
+                &self.committed.u,
+                block,
+            ),
+            reaction: Some(reaction.unwrap_or([0.0; 3])),
+        }
     }
 
     fn external(&self, acc: Point, with_loads: bool) -> Vec<f64> {
@@ -864,6 +1086,8 @@ pub fn run_with_progress<'a>(
         base: vec![0.0; n],
         step: f_grav.clone(),
         presc_step: zero_presc.clone(),
+        pin_step: Vec::new(),
+        record: None,
     };
     d.begin_phase("gravity", Some(steps), 1.0);
     let (s, why) = d.run_phase(&phase, steps)?;
@@ -888,6 +1112,8 @@ pub fn run_with_progress<'a>(
             base: f_grav.clone(),
             step: vec![0.0; n],
             presc_step: presc,
+            pin_step: Vec::new(),
+            record: None,
         };
         d.begin_phase("prescribed", Some(steps), 1.0);
         let (s, why) = d.run_phase(&phase, steps)?;
@@ -902,6 +1128,43 @@ pub fn run_with_progress<'a>(
             ));
         }
     }
+    // phase 3: displacement control
+    if let Some(push) = d.settings.push {
+        let crate::mesh::BlockDofs::Rigid { first, .. } = mesh.blocks[push.block].dofs else {
+            unreachable!("Push::from_scene admits rigid blocks only")
+        };
+        let f = first as usize;
+        let mut pin_step = vec![(f, push.horizontal), (f + 2, 0.0)];
+        if let Some(v) = push.vertical {
+            pin_step.push((f + 1, v));
+        }
+        let phase = Phase {
+            base: d.external(g, true),
+            step: vec![0.0; n],
+            presc_step: zero_presc.clone(),
+            pin_step,
+            record: Some(push.block),
+        };
+        d.begin_phase("push", Some(steps), 1.0);
+        let (s, why) = d.run_phase(&phase, steps)?;
+        let curve = super::curve::Curve {
+            control_block: push.block,
+            points: std::mem::take(&mut d.push_curve),
+        };
+        let mut out = match why {
+            Some(why) => fail(
+                &mut d,
+                format!(
+                    "failed at {:.1} % of the push displacement: {why}",
+                    100.0 * s
+                ),
+                None,
+            ),
+            None => finish(&mut d, Status::Stable, None, None),
+        };
+        out.capacity_curve = Some(curve);
+        return Ok(out);
+    }
     let f_base = d.external(g, true);
     let f_lat = d.external([gnorm, 0.0], false);
     match scene.analysis.kind {
@@ -911,7 +1174,9 @@ pub fn run_with_progress<'a>(
                 let phase = Phase {
                     base: f_base,
                     step,
-                    presc_step: zero_presc,
+                    presc_step: zero_presc.clone(),
+                    pin_step: Vec::new(),
+                    record: None,
                 };
                 d.begin_phase("lateral", Some(steps), scene.analysis.lateral);
                 let (s, why) = d.run_phase(&phase, steps)?;
@@ -945,6 +1210,7 @@ pub fn run_with_progress<'a>(
                     &d.committed.u,
                     block,
                 ),
+                reaction: None,
             };
             let mut curve: Vec<super::curve::CurvePoint> = control
                 .map(|b| curve_point(&d, 0.0, b))

@@ -2,10 +2,12 @@
 //! band (METHOD.md section 3) behind the [`ContactLaw`] trait.
 
 pub mod mohr_coulomb;
+pub mod softening;
 
 pub use mohr_coulomb::MohrCoulomb;
+pub use softening::Softening;
 
-use crate::scene::{Joint, Material, Plane};
+use crate::scene::{Joint, JointSoftening, Material, Plane};
 
 /// Elastic matrix Dₑ (Pa) in Voigt order (xx, yy, xy engineering shear), METHOD.md §2.
 /// Plane strain: [[λ+2μ, λ, 0], [λ, λ+2μ, 0], [0, 0, μ]]. Plane stress: the same with
@@ -87,6 +89,108 @@ pub trait ContactLaw: Sync + Send {
     fn springs(&self, area: f64) -> ContactSprings;
     /// Forces (normal, shear; N) and state after the increment `d` = (Δδₙ, Δδₛ) (m).
     fn update(&self, area: f64, committed: [f64; 2], d: [f64; 2]) -> ([f64; 2], ContactState);
+    /// [`ContactLaw::update`] for a law with history: `history` is the contact's committed
+    /// history variable (dimensionless; 0 for a new contact), returned updated. Laws
+    /// without history keep it unchanged.
+    fn update_history(
+        &self,
+        area: f64,
+        committed: [f64; 2],
+        history: f64,
+        d: [f64; 2],
+    ) -> ([f64; 2], ContactState, f64) {
+        let (f, s) = self.update(area, committed, d);
+        (f, s, history)
+    }
+}
+
+/// The contact law of each contact of a model: one law for all ([`ContactLaw`] types
+/// serve as their own), or one per contact ([`PerContact`]).
+pub trait ContactLaws: Sync + Send {
+    /// The law of contact `k`.
+    fn law(&self, k: usize) -> &dyn ContactLaw;
+}
+
+impl<T: ContactLaw> ContactLaws for T {
+    fn law(&self, _k: usize) -> &dyn ContactLaw {
+        self
+    }
+}
+
+/// A law per contact: `laws[of[k]]` for contact k.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PerContact<L> {
+    pub laws: Vec<L>,
+    pub of: Vec<u32>,
+}
+
+impl<L: ContactLaw> ContactLaws for PerContact<L> {
+    fn law(&self, k: usize) -> &dyn ContactLaw {
+        &self.laws[self.of[k] as usize]
+    }
+}
+
+impl<L> PerContact<L> {
+    /// The law of contact `k`, as its own type.
+    pub fn get(&self, k: usize) -> &L {
+        &self.laws[self.of[k] as usize]
+    }
+}
+
+/// The law of a `[[joint]]`: Mohr–Coulomb with tension cut-off (METHOD.md §3), or with
+/// softening of the tensile strength and the cohesion (`softening = "exponential"`,
+/// [`Softening`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum JointLaw {
+    MohrCoulomb(MohrCoulomb),
+    Softening(Softening),
+}
+
+impl JointLaw {
+    pub fn from_joint(j: &Joint) -> Self {
+        match j.softening {
+            JointSoftening::None => JointLaw::MohrCoulomb(MohrCoulomb::from_joint(j)),
+            JointSoftening::Exponential => JointLaw::Softening(Softening::from_joint(j)),
+        }
+    }
+    /// The elastic band.
+    pub fn elastic(&self) -> ElasticBand {
+        match self {
+            JointLaw::MohrCoulomb(m) => m.elastic,
+            JointLaw::Softening(m) => m.elastic,
+        }
+    }
+    /// tan φ: the dependence of the shear strength on the normal force.
+    pub fn tan_phi(&self) -> f64 {
+        match self {
+            JointLaw::MohrCoulomb(m) => m.tan_phi,
+            JointLaw::Softening(m) => m.tan_phi,
+        }
+    }
+}
+
+impl ContactLaw for JointLaw {
+    fn springs(&self, area: f64) -> ContactSprings {
+        self.elastic().springs(area)
+    }
+    fn update(&self, area: f64, committed: [f64; 2], d: [f64; 2]) -> ([f64; 2], ContactState) {
+        match self {
+            JointLaw::MohrCoulomb(m) => m.update(area, committed, d),
+            JointLaw::Softening(m) => m.update(area, committed, d),
+        }
+    }
+    fn update_history(
+        &self,
+        area: f64,
+        committed: [f64; 2],
+        history: f64,
+        d: [f64; 2],
+    ) -> ([f64; 2], ContactState, f64) {
+        match self {
+            JointLaw::MohrCoulomb(m) => m.update_history(area, committed, history, d),
+            JointLaw::Softening(m) => m.update_history(area, committed, history, d),
+        }
+    }
 }
 
 /// The elastic band without strength limits (METHOD.md §3, stick state everywhere).

@@ -134,12 +134,21 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
 /// The text of `curve.csv`: header `load_factor,ux_m,uy_m`, one row per converged state of
 /// the capacity search (the first one after gravity, at λ = 0).
 pub fn curve_csv(curve: &crate::analysis::curve::Curve) -> String {
-    let mut s = String::from("load_factor,ux_m,uy_m\n");
+    let push = curve.points.iter().any(|p| p.reaction.is_some());
+    let mut s = String::from(if push {
+        "load_factor,ux_m,uy_m,force_x_N,force_y_N,moment_Nm\n"
+    } else {
+        "load_factor,ux_m,uy_m\n"
+    });
     for p in &curve.points {
         s.push_str(&format!(
-            "{},{:e},{:e}\n",
+            "{},{:e},{:e}",
             p.load_factor, p.displacement[0], p.displacement[1]
         ));
+        if let Some(r) = p.reaction.filter(|_| push) {
+            s.push_str(&format!(",{:e},{:e},{:e}", r[0], r[1], r[2]));
+        }
+        s.push('\n');
     }
     s
 }
@@ -155,7 +164,12 @@ pub fn write_figures(
     formats: &[figures::Format],
 ) -> Result<Vec<std::path::PathBuf>> {
     let fig = figures::Deformed::from_run(scene, mesh, out);
-    let rows: Option<Vec<[f64; 3]>> = out.capacity_curve.as_ref().map(|c| {
+    // a displacement-controlled run's curve is not drawn (its load is a force, not λ)
+    let capacity = out
+        .capacity_curve
+        .as_ref()
+        .filter(|c| c.points.iter().all(|p| p.reaction.is_none()));
+    let rows: Option<Vec<[f64; 3]>> = capacity.map(|c| {
         c.points
             .iter()
             .map(|p| [p.load_factor, p.displacement[0], p.displacement[1]])

@@ -11,6 +11,7 @@ pub const EXAMPLES: &[(&str, &str, &str)] = &[
     ("slope", "the Goodman and Bray (1976) toppling rock slope: 16 columns on a stepped base", SLOPE),
     ("sliding", "dynamic: a 4 m x 4 m block slides down a 30 degree incline, phi = 25 degrees (seed section 4.2, dt = 0.04 s)", SLIDING),
     ("tunnel", "a circular tunnel in rock cut by two joint sets, inside a fixed frame", TUNNEL),
+    ("eindhoven", "the Eindhoven shear wall J4D (Raijmakers and Vermeltfoort 1992): softening joints, 0.30 N/mm2 pre-compression, top pushed 4 mm and held horizontal", EINDHOVEN),
 ];
 
 pub fn get(name: &str) -> Option<&'static str> {
@@ -340,6 +341,94 @@ tolerance = 1e-6
 
 [analysis]
 type = "static"
+"#;
+
+const EINDHOVEN: &str = r#"title = "Eindhoven shear wall J4D, pre-compression 0.30 N/mm2 (Raijmakers and Vermeltfoort 1992)"
+# Lourenco and Rots (1997) micro-model data (BENCHMARKS.md V8): solid clay bricks
+# 210 x 52 x 100 mm, 10 mm mortar joints, modelled as expanded bricks (brick plus half
+# a joint all round) with zero-thickness joints; E = 16700 N/mm2, nu = 0.15 (plane
+# stress, 100 mm thick); joints kn = 82 N/mm3, ks = 36 N/mm3 (over a 10 mm band),
+# ft = 0.25 N/mm2, G_f^I = 0.018 N/mm, c = 0.35 N/mm2, tan(phi) = 0.75,
+# G_f^II = 0.125 N/mm. The wall is 990 mm wide; its 16 free courses (992 mm) stand
+# between the clamped bottom and top courses, here a fixed base and a rigid steel beam.
+# The pre-compression p = 0.30 N/mm2 over 990 x 100 mm is 29.7 kN on the beam (1.21 and
+# 2.12 N/mm2: 119.79 kN and 209.88 kN, walls J7D and J9D); the beam is then pushed
+# sideways 4 mm "in a confined way" (Lourenco and Rots 1997): its rotation and its
+# vertical motion held (curve.csv: the horizontal load force_x_N against ux_m; with
+# push_displacement = 0.004 the beam rises freely under a constant pre-compression).
+# Lourenco reports about 50 kN at the peak for the experiments J4D and J5D.
+
+[model]
+plane = "stress"
+thickness = 0.1
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "brick"
+lame_lambda = 3.1118e9
+lame_mu = 7.2609e9
+unit_weight = 18e3
+
+[[material]]
+name = "steel"
+lame_lambda = 121e9
+lame_mu = 81e9
+unit_weight = 0.0
+
+[[joint]]
+name = "mortar"
+normal_modulus = 8.2e8
+shear_modulus = 3.6e8
+band = 0.010
+friction_angle = 36.8699
+cohesion = 0.35e6
+tensile_strength = 0.25e6
+softening = "exponential"
+fracture_energy_i = 18.0
+fracture_energy_ii = 125.0
+
+# the bottom and top courses are clamped in the steel beams: their contacts with the
+# base and the beam do not fail
+[[joint]]
+name = "clamped"
+normal_modulus = 8.2e8
+shear_modulus = 3.6e8
+band = 0.010
+friction_angle = 36.8699
+cohesion = 1e9
+tensile_strength = 1e9
+blocks = ["base", "beam"]
+
+[[generate]]
+type = "wall"
+material = "brick"
+courses = 16
+bricks_per_course = 4.5
+brick_length = 0.21
+brick_height = 0.052
+joint = 0.01
+base = true
+top_beam = false
+
+[[block]]
+name = "beam"
+material = "steel"
+kind = "rigid"
+vertices = [[0.0, 0.992], [0.99, 0.992], [0.99, 1.092], [0.0, 1.092]]
+
+[[load]]
+block = "beam"
+force = [0.0, -29.7e3]
+
+[contacts]
+joint = "mortar"
+tolerance = 1e-6
+
+[analysis]
+type = "static"
+load_steps = 80
+push_block = "beam"
+push_displacement = [0.004, 0.0]
 "#;
 
 #[cfg(test)]

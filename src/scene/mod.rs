@@ -76,6 +76,25 @@ pub struct Joint {
     pub cohesion: f64,
     /// Tensile strength fₜ, Pa.
     pub tensile_strength: f64,
+    /// Softening of fₜ and c (`softening`; docs/theory.md, "Softening joints").
+    pub softening: JointSoftening,
+    /// Mode-I fracture energy G_f^I, N/m (softening joints).
+    pub fracture_energy_i: f64,
+    /// Mode-II fracture energy G_f^II, N/m (softening joints).
+    pub fracture_energy_ii: f64,
+    /// Indices into [`Scene::blocks`]: contacts touching any of them take this joint
+    /// instead of the `[contacts]` one (`blocks`; empty: none).
+    pub blocks: Vec<usize>,
+}
+
+/// `[[joint]] softening`: how the tensile strength and the cohesion degrade.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum JointSoftening {
+    /// Constant strengths (the Mohr–Coulomb band of METHOD.md §3).
+    #[default]
+    None,
+    /// Exponential softening governed by the fracture energies (Lourenço and Rots 1997).
+    Exponential,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -194,5 +213,14 @@ pub struct Scene {
 impl Scene {
     pub fn block_index(&self, name: &str) -> Option<usize> {
         self.blocks.iter().position(|b| b.name == name)
+    }
+
+    /// The joint (index into [`Scene::joints`]) of a contact between blocks `a` and `b`:
+    /// the first joint whose `blocks` names either of them, else the `[contacts]` joint.
+    pub fn joint_of(&self, a: usize, b: usize) -> usize {
+        self.joints
+            .iter()
+            .position(|j| j.blocks.contains(&a) || j.blocks.contains(&b))
+            .unwrap_or(self.contacts.joint)
     }
 }

@@ -68,6 +68,10 @@ struct RawJoint {
     friction_angle: Option<f64>,
     cohesion: Option<f64>,
     tensile_strength: Option<f64>,
+    softening: Option<String>,
+    fracture_energy_i: Option<f64>,
+    fracture_energy_ii: Option<f64>,
+    blocks: Option<Vec<String>>,
 }
 
 #[derive(Deserialize)]
@@ -137,6 +141,8 @@ pub const ANALYSIS_KEYS: &[&str] = &[
     "initial_step",
     "bracket",
     "line_search",
+    "push_block",
+    "push_displacement",
     "integrator",
     "alpha",
     "rho_inf",
@@ -337,6 +343,8 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
 
     // [[joint]]
     let mut joints: Vec<Joint> = Vec::new();
+    // per joint: where it stands and the names of its `blocks`, resolved after the blocks
+    let mut joint_blocks: Vec<(usize, String, Vec<String>)> = Vec::new();
     for (i, j) in raw.joint.iter().enumerate() {
         let at = j.span().start;
         let j = j.get_ref();
@@ -395,6 +403,53 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
                 ))
             }
         };
+        let cohesion = opt("cohesion", j.cohesion, "Pa")?;
+        let tensile_strength = opt("tensile_strength", j.tensile_strength, "Pa")?;
+        let softening = match j.softening.as_deref() {
+            None | Some("none") => JointSoftening::None,
+            Some("exponential") => JointSoftening::Exponential,
+            Some(other) => {
+                return Err(err_at(
+                    src.key_line(at, "softening"),
+                    format!("{place} key 'softening'"),
+                    format!("unknown softening \"{other}\""),
+                    "use \"exponential\" (or \"none\", the default)",
+                ))
+            }
+        };
+        let (fracture_energy_i, fracture_energy_ii) = if softening == JointSoftening::None {
+            if let Some(key) = [
+                ("fracture_energy_i", j.fracture_energy_i),
+                ("fracture_energy_ii", j.fracture_energy_ii),
+            ]
+            .iter()
+            .find_map(|(k, v)| v.map(|_| *k))
+            {
+                return Err(err_at(
+                    src.key_line(at, key),
+                    format!("{place} key '{key}'"),
+                    "a fracture energy is given but the joint does not soften",
+                    "add softening = \"exponential\" to the joint, or remove the key",
+                ));
+            }
+            (0.0, 0.0)
+        } else {
+            let gf1 = need("fracture_energy_i", j.fracture_energy_i, "N/m")?;
+            let gf2 = need("fracture_energy_ii", j.fracture_energy_ii, "N/m")?;
+            let tan_phi = friction_angle.to_radians().tan();
+            if tensile_strength * tan_phi > cohesion * (1.0 + 1e-12) {
+                return Err(err_at(
+                    src.key_line(at, "tensile_strength"),
+                    format!("{place} key 'tensile_strength'"),
+                    format!(
+                        "the tension cut-off fₜ = {tensile_strength} Pa lies beyond the apex of the Coulomb line (c / tan φ = {} Pa)",
+                        cohesion / tan_phi
+                    ),
+                    "a softening joint needs tensile_strength ≤ cohesion / tan(friction_angle): lower the tensile strength or raise the cohesion",
+                ));
+            }
+            (gf1, gf2)
+        };
         joints.push(Joint {
             name,
             normal_modulus,
@@ -403,9 +458,14 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
             shear_viscosity: opt("shear_viscosity", j.shear_viscosity, "Pa·s")?,
             band,
             friction_angle,
-            cohesion: opt("cohesion", j.cohesion, "Pa")?,
-            tensile_strength: opt("tensile_strength", j.tensile_strength, "Pa")?,
+            cohesion,
+            tensile_strength,
+            softening,
+            fracture_energy_i,
+            fracture_energy_ii,
+            blocks: Vec::new(),
         });
+        joint_blocks.push((at, place.clone(), j.blocks.clone().unwrap_or_default()));
     }
 
     let material_index = |name: &str, line: usize, place: &str| -> Result<usize> {
@@ -653,6 +713,20 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
                     format!("the name is already used by the block at line {}", blocks[j].line.unwrap_or(1)),
                     "give every block a different name (set `name` on [[generate]] entries to prefix them)"));
             }
+        }
+    }
+
+    for (j, (at, place, names)) in joint_blocks.iter().enumerate() {
+        for name in names {
+            let b = blocks.iter().position(|b| &b.name == name).ok_or_else(|| {
+                err_at(
+                    src.key_line(*at, "blocks"),
+                    format!("{place} key 'blocks'"),
+                    format!("there is no block '{name}'"),
+                    "name blocks of the scene (generated walls call their base \"base\" and their top beam \"top\")",
+                )
+            })?;
+            joints[j].blocks.push(b);
         }
     }
 

@@ -1,0 +1,208 @@
+//! Softening joints through the static driver under displacement control
+//! (docs/theory.md, "Softening joints"; `[analysis] push_block`): a rigid block on a
+//! fixed one, joined by the Eindhoven joint of BENCHMARKS.md V8 (kₙ = 82 N/mm³,
+//! kₛ = 36 N/mm³, fₜ = 0.25 N/mm², G_f^I = 0.018 N/mm, c = 0.35 N/mm², tan φ = 0.75,
+//! G_f^II = 0.125 N/mm; Lourenço and Rots 1997), in SI units.
+//!
+//! (a) Pulled apart: the force follows fₜ A exp(−fₜ u_p / G_f^I), u_p the crack opening
+//!     (the opening less the elastic part F/(kₙ A)), and the work of the pulling force
+//!     is G_f^I A within 1 %, whatever the number of contacts the joint is split into.
+//! (b) Sheared under a constant compression σ: the shear force falls from
+//!     (c − σ tan φ) A to −σ tan φ A, and the work dissipated by the cohesion (the work
+//!     of the shear force less friction × slip and the elastic energy left) is G_f^II A
+//!     within 1 %.
+
+mod common;
+use dfem::analysis::{Outcome, Status};
+
+const L: f64 = 0.2; // joint length, m
+const T: f64 = 0.1; // thickness, m
+const AREA: f64 = L * T;
+const FT: f64 = 0.25e6;
+const GF1: f64 = 18.0; // N/m
+const C: f64 = 0.35e6;
+const TAN_PHI: f64 = 0.75;
+const GF2: f64 = 125.0;
+const KN: f64 = 82e9; // N/m³
+const BAND: f64 = 0.01;
+
+fn scene(mesh_size: Option<f64>, load: f64, push: &str, steps: usize) -> String {
+    let ms = mesh_size.map_or(String::new(), |m| format!("mesh_size = {m}\n"));
+    format!(
+        r#"
+[model]
+plane = "stress"
+thickness = {T}
+gravity = [0.0, 0.0]
+[[material]]
+name = "brick"
+lame_lambda = 3.1e9
+lame_mu = 7.3e9
+unit_weight = 0.0
+[[joint]]
+name = "mortar"
+normal_modulus = {en}
+shear_modulus = {es}
+band = {BAND}
+friction_angle = {phi}
+cohesion = {C}
+tensile_strength = {FT}
+softening = "exponential"
+fracture_energy_i = {GF1}
+fracture_energy_ii = {GF2}
+[[block]]
+name = "base"
+material = "brick"
+support = "fixed"
+vertices = [[0.0, -0.1], [{L}, -0.1], [{L}, 0.0], [0.0, 0.0]]
+{ms}
+[[block]]
+name = "top"
+material = "brick"
+kind = "rigid"
+vertices = [[0.0, 0.0], [{L}, 0.0], [{L}, 0.1], [0.0, 0.1]]
+{ms}
+[[load]]
+block = "top"
+force = [0.0, {load}]
+[analysis]
+type = "static"
+load_steps = {steps}
+push_block = "top"
+push_displacement = {push}
+"#,
+        en = KN * BAND,
+        es = 36e9 * BAND,
+        phi = TAN_PHI.atan().to_degrees(),
+    )
+}
+
+/// The push curve: (ux, uy, Fx, Fy) per converged increment (m, N).
+fn curve(out: &Outcome) -> Vec<[f64; 4]> {
+    let c = out.capacity_curve.as_ref().expect("a push curve");
+    c.points
+        .iter()
+        .map(|p| {
+            let r = p.reaction.expect("push points carry the reaction");
+            [p.displacement[0], p.displacement[1], r[0], r[1]]
+        })
+        .collect()
+}
+
+/// ∫ F du by the trapezoid rule over (u, F) points.
+fn work(pts: impl Iterator<Item = [f64; 2]>) -> f64 {
+    let pts: Vec<[f64; 2]> = pts.collect();
+    pts.windows(2)
+        .map(|w| 0.5 * (w[0][1] + w[1][1]) * (w[1][0] - w[0][0]))
+        .sum()
+}
+
+/// Independent closed form of the pull test: the stress (Pa) at a total opening u (m),
+/// σ = kₙ u up to fₜ, then the root of σ = fₜ exp(−fₜ (u − σ/kₙ)/G_f^I) (a contraction:
+/// the iteration's factor fₜ² σ/(G kₙ fₜ) ≤ 0.04).
+fn pull_stress(u: f64) -> f64 {
+    if u <= FT / KN {
+        return KN * u;
+    }
+    let mut s = FT;
+    for _ in 0..100 {
+        s = FT * (-FT * (u - s / KN) / GF1).exp();
+    }
+    s
+}
+
+/// Pull the top block up by 1 mm in 400 increments of 2.5 µm: (contacts, work of the
+/// pulling force (J), largest deviation of the force from A σ(u) (N)).
+fn pull(mesh_size: Option<f64>) -> (usize, f64, f64) {
+    let steps = 400;
+    let sc = common::scene(&scene(mesh_size, 0.0, "[0.0, 1e-3]", steps));
+    let (mesh, out) = common::solve(&sc);
+    assert_eq!(out.status, Status::Stable, "{:?}", out.status);
+    let pts = curve(&out);
+    assert_eq!(pts.len(), steps + 1);
+    let dev = pts
+        .iter()
+        .map(|p| (p[3] - AREA * pull_stress(p[1])).abs())
+        .fold(0.0, f64::max);
+    (
+        mesh.contacts.len(),
+        work(pts.iter().map(|p| [p[1], p[3]])),
+        dev,
+    )
+}
+
+#[test]
+fn pulled_joint_follows_the_exponential_and_dissipates_gf1_whatever_the_mesh() {
+    let coarse = pull(None);
+    let fine = pull(Some(0.02));
+    eprintln!("pull: (contacts, work J, force error N) {coarse:?} {fine:?}");
+    assert!(
+        fine.0 > coarse.0,
+        "the finer mesh has more contacts: {fine:?} {coarse:?}"
+    );
+    let g = GF1 * AREA;
+    for (contacts, w, dev) in [coarse, fine] {
+        // the return is exact along the path and the increments converge to 1e-6 of the
+        // force: 1e-4 of the peak force fₜ A is far above both
+        assert!(
+            dev < 1e-4 * FT * AREA,
+            "{contacts} contacts: force off by {dev} N"
+        );
+        // trapezoid rule with 2.5 µm steps on a decay length G/fₜ = 72 µm:
+        // ~(2.5/72)²/12 = 1e-4; the tail left at 1 mm is exp(−1000/72) ≈ 1e-6
+        assert!(
+            (w - g).abs() < 0.01 * g,
+            "{contacts} contacts: work {w} J against G_f^I A = {g} J"
+        );
+    }
+    // mesh independence: the same energy to 0.1 %
+    assert!((coarse.1 - fine.1).abs() < 1e-3 * g, "{coarse:?} {fine:?}");
+}
+
+#[test]
+fn sheared_joint_softens_to_friction_and_dissipates_gf2() {
+    let sigma = -0.30e6; // the lowest Eindhoven pre-compression, Pa
+                         // 4 mm in 400 increments of 10 µm: decay length G_f^II/c = 357 µm, trapezoid error
+                         // ~(10/357)²/12 = 7e-5; the tail left exp(−4000/357) ≈ 1.4e-5
+    let steps = 400;
+    let sc = common::scene(&scene(None, sigma * AREA, "4e-3", steps));
+    let (_, out) = common::solve(&sc);
+    assert_eq!(out.status, Status::Stable, "{:?}", out.status);
+    let pts = curve(&out);
+    let n = -sigma * AREA;
+    let friction = TAN_PHI * n;
+    let peak = pts.iter().map(|p| p[2]).fold(0.0, f64::max);
+    let end = pts.last().unwrap()[2];
+    // (c − σ tan φ) A = 11.5 kN; the peak is reached within a step past the elastic limit
+    // (the cohesion falls by exp(−10 µm/357 µm) = 3 % over a step at most)
+    let p0 = (C + TAN_PHI * -sigma) * AREA;
+    assert!(
+        (peak - p0).abs() < 0.03 * p0,
+        "peak {peak} N against {p0} N"
+    );
+    assert!(
+        (end - friction).abs() < 1e-3 * friction,
+        "end {end} N against {friction} N"
+    );
+    // the block stays on the joint: its vertical reaction is nil (the compression is a
+    // load) and the contacts carry σ A
+    let normal: f64 = out.contact_forces.iter().map(|f| f[0]).sum();
+    assert!(
+        (normal - sigma * AREA).abs() < 1e-4 * n,
+        "normal force {normal}"
+    );
+    // energy balance: the work of the pushing force is the elastic energy left in the
+    // joint, H²/(2 kₛ A), plus friction × the slip u − H/(kₛ A), plus what the cohesion
+    // dissipated
+    let ks = 36e9 * AREA;
+    let last = pts.last().unwrap();
+    let w = work(pts.iter().map(|p| [p[0], p[2]]))
+        - last[2] * last[2] / (2.0 * ks)
+        - friction * (last[0] - last[2] / ks);
+    let g = GF2 * AREA;
+    eprintln!("shear: peak {peak} N, end {end} N, cohesive work {w} J");
+    assert!(
+        (w - g).abs() < 0.01 * g,
+        "work beyond friction {w} J against {g} J"
+    );
+}

@@ -28,18 +28,7 @@ fn scene_text(duration: f64) -> String {
     );
     format!(
         r#"title = "box dropped on a base under El Centro"
-[[material]]
-name = "rock"
-lame_lambda = 56e9
-lame_mu = 21e9
-unit_weight = 25e3
-[[joint]]
-name = "j"
-normal_modulus = 50e9
-shear_modulus = 5e9
-band = 0.01
-friction_angle = 5.71
-[[block]]
+{}[[block]]
 name = "base"
 material = "rock"
 support = "fixed"
@@ -58,7 +47,8 @@ ground_motion = {{ file = "{record}", format = "csv", direction = "x" }}
 [output]
 every = 40
 checkpoint_every = 50
-"#
+"#,
+        common::rock_and_joint(5.71)
     )
 }
 

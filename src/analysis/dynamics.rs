@@ -665,7 +665,7 @@ impl<'a> Dynamics<'a> {
         let found = contact_search::search(&self.cur, &vel, band, reach);
         let added = found.len();
         for f in found {
-            if std::env::var_os("DFEM_TRACE").is_some() {
+            if super::tracing() {
                 eprintln!(
                     "  new contact {}-{} node {} gap {:.4e} length {:.4}",
                     f.contact.block_l, f.contact.block_m, f.contact.node_m, f.gap, f.contact.length
@@ -986,7 +986,7 @@ impl<'a> Dynamics<'a> {
                     };
                 }
                 if last_resort && flips[k] >= FREEZE_FLIPS && !frozen[k] {
-                    if std::env::var_os("DFEM_TRACE").is_some() {
+                    if super::tracing() {
                         eprintln!("  hold open: contact {k}");
                     }
                     frozen[k] = true;
@@ -1012,7 +1012,7 @@ impl<'a> Dynamics<'a> {
                         && (trial.force[k][0].hypot(trial.force[k][1]) > negligible
                             || prev_force[k][0].hypot(prev_force[k][1]) > negligible)
                 });
-            if std::env::var_os("DFEM_TRACE").is_some() {
+            if super::tracing() {
                 eprintln!(
                     "t {t0:.4} h {h:.3e} it {it} residual {:.3e}",
                     bal.rn / bal.scale
@@ -1271,13 +1271,6 @@ impl<'a> Dynamics<'a> {
             .fold(0.0, f64::max)
     }
 
-    /// Whether an error-controlled step's local error exceeds `adaptive_tolerance`.
-    fn too_inaccurate(&self, acc: &Accepted, h: f64) -> bool {
-        self.settings
-            .adaptive
-            .is_some_and(|tol| self.step_error(acc, h) > tol)
-    }
-
     /// Advance to time `target` (s), cutting the step when it does not converge.
     /// Returns false when even the smallest step fails.
     fn advance_to(&mut self, target: f64) -> Result<bool> {
@@ -1297,7 +1290,7 @@ impl<'a> Dynamics<'a> {
                 // its base bounced higher than it fell). The step is redone from the
                 // start's acceleration and internal force without them.
                 let start = (self.a.clone(), self.f_int.clone());
-                if std::env::var_os("DFEM_TRACE").is_some() {
+                if super::tracing() {
                     let k: Vec<usize> = (0..released.len()).filter(|&k| released[k]).collect();
                     eprintln!("  release redo: contacts {k:?}");
                 }
@@ -1305,17 +1298,26 @@ impl<'a> Dynamics<'a> {
                 accepted = self.step(h, last_resort)?;
                 saved = Some(start);
             }
+            // the local error of an error-controlled step, computed once for the cut and
+            // for the growth of the next step
+            let error = match (&accepted, self.settings.adaptive) {
+                (Some(acc), Some(_)) => self.step_error(acc, h),
+                _ => 0.0,
+            };
             let cut = match &accepted {
                 None => true,
                 // an impact the step cannot resolve: cut it (see `too_fast`)
                 Some(acc) if h > hmin * (1.0 + 1e-9) && self.too_fast(acc) => {
-                    if std::env::var_os("DFEM_TRACE").is_some() {
+                    if super::tracing() {
                         eprintln!("  impact cut");
                     }
                     self.stats.impact_cuts += 1;
                     true
                 }
-                Some(acc) if h > hmin * (1.0 + 1e-9) && self.too_inaccurate(acc, h) => {
+                Some(_)
+                    if h > hmin * (1.0 + 1e-9)
+                        && self.settings.adaptive.is_some_and(|tol| error > tol) =>
+                {
                     self.stats.error_cuts += 1;
                     true
                 }
@@ -1340,12 +1342,9 @@ impl<'a> Dynamics<'a> {
                         .collect();
                     // an error-controlled step grows only where the doubled step would
                     // stay within the tolerance (the local error grows as h³)
-                    let grow = self
-                        .settings
-                        .adaptive
-                        .is_none_or(|tol| self.step_error(&acc, h) < tol / 8.0);
+                    let grow = self.settings.adaptive.is_none_or(|tol| error < tol / 8.0);
                     self.commit(acc);
-                    if std::env::var_os("DFEM_TRACE").is_some() {
+                    if super::tracing() {
                         eprintln!(
                             "  commit t {:.6} h {h:.3e} E_k {:.4e} E_el {:.4e}",
                             self.time, self.energy.kinetic, self.energy.elastic

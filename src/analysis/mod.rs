@@ -210,6 +210,12 @@ fn record_resources(out: &mut Outcome, backend: &dyn LinearBackend) {
     out.stats.peak_memory_mb = crate::resources::peak_resident_bytes().map(|b| b as f64 / 1e6);
 }
 
+/// Whether the drivers print their iterations to stderr (`DFEM_TRACE` set), read once.
+pub(crate) fn tracing() -> bool {
+    static TRACE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *TRACE.get_or_init(|| std::env::var_os("DFEM_TRACE").is_some())
+}
+
 /// Where an `[analysis]` key stands, for error messages.
 pub(crate) fn analysis_place(k: &str) -> String {
     format!("[analysis] key '{k}'")

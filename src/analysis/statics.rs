@@ -616,7 +616,7 @@ impl<'a> Driver<'a> {
             if let Some(p) = self.progress.as_deref_mut() {
                 p.iteration(it, rn / scale);
             }
-            if std::env::var_os("DFEM_TRACE").is_some() {
+            if super::tracing() {
                 eprintln!(
                     "it {it} residual {:.3e} open {} slip {}",
                     rn / scale,

@@ -44,6 +44,8 @@ dt = {DT}
 duration = {duration}
 integrator = "hht"
 ground_motion = {{ file = "{record}", format = "csv", direction = "x" }}
+# the foundation moves (its displacement and velocity are part of the checkpoint)
+frame = "absolute"
 [output]
 every = 40
 checkpoint_every = 50

@@ -104,48 +104,6 @@ fn block_stays_on_an_incline_below_the_friction_angle() {
     assert!(col(&h, "slipping_contacts").iter().all(|&s| s == 0.0));
 }
 
-/// Rigid-plastic sliding block on a moving base (two-way, Coulomb μ): relative
-/// displacement x(t) of the block with respect to the ground, explicit integration with a
-/// fine step and the exact stick test. Returns the largest |x|.
-fn sliding_reference(t: &[f64], ag: &[f64], mu: f64, duration: f64) -> f64 {
-    let interp = |x: f64| -> f64 {
-        if x >= t[t.len() - 1] {
-            return 0.0;
-        }
-        let k = t.partition_point(|&s| s <= x).clamp(1, t.len() - 1);
-        let w = (x - t[k - 1]) / (t[k] - t[k - 1]);
-        ag[k - 1] + w * (ag[k] - ag[k - 1])
-    };
-    let dt = 1e-4;
-    let (mut x, mut v, mut xmax) = (0.0f64, 0.0f64, 0.0f64);
-    let steps = (duration / dt).round() as usize;
-    for k in 0..steps {
-        let tm = (k as f64 + 0.5) * dt;
-        let a = interp(tm);
-        // relative frame: inertial force −m a_g; friction μ m g against the sliding
-        let dv = if v == 0.0 {
-            if a.abs() <= mu * G {
-                0.0
-            } else {
-                (-a - mu * G * (-a).signum()) * dt
-            }
-        } else {
-            let nv = v + (-a - mu * G * v.signum()) * dt;
-            if nv * v < 0.0 {
-                // the block stops within the step
-                -v
-            } else {
-                nv - v
-            }
-        };
-        let v0 = v;
-        v += dv;
-        x += 0.5 * (v0 + v) * dt;
-        xmax = xmax.max(x.abs());
-    }
-    xmax
-}
-
 #[test]
 fn block_slides_on_a_base_under_el_centro() {
     let file = concat!(
@@ -161,28 +119,22 @@ fn block_slides_on_a_base_under_el_centro() {
         a.push(it.next().unwrap().parse::<f64>().unwrap() * G);
     }
     let duration = 15.0;
-    for mu in [0.2f64, 0.1] {
-        let phi = mu.atan().to_degrees();
-        let text = format!(
-            r#"{}
-[[block]]
-name = "base"
-material = "rock"
-support = "fixed"
-vertices = [[-2.0, -1.0], [3.0, -1.0], [3.0, 0.0], [-2.0, 0.0]]
-[[block]]
-name = "box"
-material = "rock"
-kind = "rigid"
-vertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]
-[analysis]
+    let record = |x: f64| common::interpolate(&t, &a, x);
+    // the relative frame, and the ground motion as the foundation's prescribed motion
+    // (`frame = "absolute"`, tests/ground_frames.rs) for tan φ = 0.2
+    for (mu, frame) in [(0.2f64, "relative"), (0.2, "absolute"), (0.1, "relative")] {
+        let text = common::box_on_base(
+            mu,
+            &format!(
+                r#"[analysis]
 type = "dynamic"
 dt = 0.005
 duration = {duration}
 integrator = "hht"
 ground_motion = {{ file = "{file}", format = "csv", direction = "x" }}
-"#,
-            common::rock_and_joint(phi)
+frame = "{frame}"
+"#
+            ),
         );
         let h = run(&text);
         let ux = col(&h, "box.ux");
@@ -192,11 +144,11 @@ ground_motion = {{ file = "{file}", format = "csv", direction = "x" }}
         let tt = col(&h, "t");
         let k = tt.iter().position(|&x| (x - 2.02).abs() < 1e-9).unwrap();
         assert!((ag[k] - a[101]).abs() < 1e-9, "{} vs {}", ag[k], a[101]);
-        let reference = sliding_reference(&t, &a, mu, duration);
+        let reference = common::rigid_plastic_sliding(record, |_| 0.0, mu, duration).0;
         let err = common::rel_err(umax, reference);
         let eerr = energy_error(&h);
         eprintln!(
-            "El Centro, tan φ = {mu}: largest sliding {umax:.5} m vs {reference:.5} m (rigid-plastic integration), {:.3} %; energy error {eerr:.2e} of the work",
+            "El Centro, tan φ = {mu}, {frame} frame: largest sliding {umax:.5} m vs {reference:.5} m (rigid-plastic integration), {:.3} %; energy error {eerr:.2e} of the work",
             100.0 * err
         );
         // 2 %: the elastic shear of the contact (~μW/kₛ ≈ 10⁻⁸ m) and the O(dt²) error
@@ -314,7 +266,7 @@ ground_motion = {{ file = "{file}", scale = 2.0, direction = "y" }}
         common::box_above_base("rigid", 0.0)
     );
     let sc = common::scene(&text);
-    let gm = sc.analysis.ground_motion.as_ref().unwrap();
+    let gm = &sc.analysis.ground_motion[0];
     // sample 7 (t = 0.07 s) of the file: 0.1 sin(2π 1.5 t) · min(1, k/50), in g
     let t: f64 = 0.07;
     let want = 2.0 * G * 0.1 * (2.0 * std::f64::consts::PI * 1.5 * t).sin() * 7.0 / 50.0;

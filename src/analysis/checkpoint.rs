@@ -27,7 +27,7 @@ use std::path::Path;
 pub const FILE: &str = "checkpoint.bin";
 const MAGIC: &[u8; 8] = b"DFEMCKPT";
 /// Version of the format; a file of another version is refused.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 /// The state of a dynamic run after `step` completed time steps.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -48,6 +48,9 @@ pub struct Checkpoint {
     pub energy: Energy,
     /// Counters so far (factorizations and wall time included).
     pub stats: Stats,
+    /// The ground's displacement (m) and velocity (m/s) in the absolute frame (zero in
+    /// the relative frame).
+    pub ground: [[f64; 2]; 2],
 }
 
 /// A checkpoint with the identity of the scene it belongs to.

@@ -1,5 +1,8 @@
 //! Implicit dynamic analysis (METHOD.md §6): M ü + C u̇ + F_int(u) = F(t), seed Eq. 12,
-//! in the frame of the ground, F = gravity + `[[load]]` forces − M ι a_g(t).
+//! in the frame of the ground, F = gravity + `[[load]]` forces − M ι a_g(t); or, with
+//! `frame = "absolute"`, in a fixed frame with F = gravity + loads and the fixed blocks
+//! (the foundation) moved by the ground's displacement, integrated from a_g(t) with the
+//! scheme's own Newmark relations (docs/theory.md §5, "Ground motion").
 //!
 //! Time integration by the generalized-α family (Chung and Hulbert 1993), which holds
 //! Newmark's average acceleration (α_m = α_f = 0, β = ¼, γ = ½), HHT-α (Hilber, Hughes
@@ -55,6 +58,7 @@ use crate::assembly::{loads, mass, LocalStiffness, System};
 use crate::geometry::polygon::Point;
 use crate::material::{block_elastic, ContactLaw, ContactSprings, ContactState, MohrCoulomb};
 use crate::mesh::{BlockDofs, Mesh};
+use crate::scene::ground_motion::{self, Frame};
 use crate::scene::Scene;
 use crate::solve::LinearBackend;
 use crate::{Error, Result};
@@ -168,6 +172,10 @@ pub struct Settings {
     /// step's node displacements allowed ([`Dynamics::step_error`]); `None`: steps of
     /// `dt` cut only when they do not converge or jump over an impact.
     pub adaptive: Option<f64>,
+    /// `[analysis] frame = "absolute"`: the fixed blocks move with the ground (the
+    /// prescribed motion of the foundation) instead of the ground-motion load on the free
+    /// blocks ([`Frame`]).
+    pub absolute: bool,
 }
 
 impl Settings {
@@ -213,6 +221,16 @@ impl Settings {
                 }
             }
         };
+        let inertia = match x.get("inertia") {
+            None => true,
+            Some(v) => v.as_bool().ok_or_else(|| {
+                Error::new("'inertia' must be true or false")
+                    .place(place("inertia"))
+                    .fix("inertia = true (default: M ü kept) or false (pseudo-dynamic: C u̇ + F_int = F(t))")
+            })?,
+        };
+        // (without inertia refused by the scene reader)
+        let absolute = scene.analysis.frame == Frame::Absolute;
         Ok(Settings {
             scheme,
             dt: scene.analysis.dt.unwrap_or(0.01),
@@ -221,14 +239,8 @@ impl Settings {
             tolerance: num("tolerance", 1e-6, 1e-14, 0.1)?,
             max_iterations: num("max_iterations", 100.0, 1.0, 1e6)? as usize,
             max_cuts: num("max_cuts", MAX_CUTS, 0.0, 30.0)? as usize,
-            inertia: match x.get("inertia") {
-                None => true,
-                Some(v) => v.as_bool().ok_or_else(|| {
-                    Error::new("'inertia' must be true or false")
-                        .place(place("inertia"))
-                        .fix("inertia = true (default: M ü kept) or false (pseudo-dynamic: C u̇ + F_int = F(t))")
-                })?,
-            },
+            inertia,
+            absolute,
             adaptive: match x.get("adaptive_tolerance") {
                 None => None,
                 Some(_) => Some(num("adaptive_tolerance", 1e-6, 1e-15, 1.0)?),
@@ -354,6 +366,11 @@ pub struct Dynamics<'a> {
     pub stats: Stats,
     pub energy: Energy,
     pub time: f64,
+    /// The ground's displacement (m) and velocity (m/s) at `time` in the absolute frame,
+    /// integrated from a_g along the steps taken by the scheme's own Newmark relations
+    /// (zero in the relative frame).
+    ground_u: [f64; 2],
+    ground_v: [f64; 2],
 }
 
 /// Open the contacts `frozen` in a trial: no force (taken out of F_int), state open.
@@ -430,6 +447,9 @@ struct StepTerms {
     c0: f64,
     h: f64,
     fe: Vec<f64>,
+    /// The ground's velocity at the step's end (m/s; zero in the relative frame): the
+    /// damping acts on the velocity relative to it.
+    vg1: [f64; 2],
 }
 
 /// The balance of a trial increment ([`Dynamics::balance`]): out-of-balance force `r`
@@ -451,6 +471,10 @@ struct Accepted {
     f_visc: Vec<f64>,
     h: f64,
     ground: [f64; 2],
+    /// The ground's displacement over the step (m) and velocity at its end (m/s) in the
+    /// absolute frame (zero in the relative frame).
+    ground_du: [f64; 2],
+    ground_v1: [f64; 2],
     /// Contacts held open for the rest of the step after cycling (see [`FREEZE_FLIPS`]).
     frozen: Vec<bool>,
 }
@@ -536,6 +560,8 @@ impl<'a> Dynamics<'a> {
             },
             energy: Energy::default(),
             time: 0.0,
+            ground_u: [0.0; 2],
+            ground_v: [0.0; 2],
         };
         if d.settings.preload {
             d.preload()?;
@@ -543,6 +569,7 @@ impl<'a> Dynamics<'a> {
         let f0 = d.f_ext(0.0);
         if d.settings.inertia {
             d.a = (0..n).map(|i| (f0[i] - d.f_int[i]) / d.mass[i]).collect();
+            d.a = d.absolute_from_relative(&d.a, d.ground(0.0));
         }
         if d.settings.preload && d.settings.inertia {
             d.filtered_acceleration();
@@ -584,7 +611,8 @@ impl<'a> Dynamics<'a> {
             && self.backend.solve(&mut x).is_ok()
             && x.iter().all(|v| v.is_finite())
         {
-            self.a = x;
+            // the filtered acceleration is the one relative to the ground
+            self.a = self.absolute_from_relative(&x, self.ground(self.time));
         }
     }
 
@@ -647,8 +675,9 @@ impl<'a> Dynamics<'a> {
     fn update_contacts(&mut self) -> bool {
         let band = self.law.elastic.band;
         let t = self.scene.model.thickness;
+        let v_rel = self.relative(&self.v, self.ground_v);
         let vel: Vec<Point> = (0..self.cur.nodes.len() as u32)
-            .map(|n| self.cur.node_displacement(n, &self.v))
+            .map(|n| self.cur.node_displacement(n, &v_rel))
             .collect();
         let vmax = vel.iter().fold(0.0f64, |m, v| m.max(v[0].hypot(v[1])));
         let reach = band + 2.0 * vmax * self.settings.dt;
@@ -753,6 +782,7 @@ impl<'a> Dynamics<'a> {
             f_visc: self.f_visc.clone(),
             energy: self.energy,
             stats: self.stats.clone(),
+            ground: [self.ground_u, self.ground_v],
         }
     }
 
@@ -769,6 +799,7 @@ impl<'a> Dynamics<'a> {
         self.f_visc = c.f_visc;
         self.energy = c.energy;
         self.stats = c.stats;
+        [self.ground_u, self.ground_v] = c.ground;
         let (area, springs, visc) = contact_coefficients(self.scene, &self.law, &self.cur.contacts);
         self.area = area;
         self.springs = springs;
@@ -779,11 +810,33 @@ impl<'a> Dynamics<'a> {
 
     /// The ground acceleration vector (m/s²) at time t.
     pub fn ground(&self, t: f64) -> [f64; 2] {
-        self.scene
-            .analysis
-            .ground_motion
-            .as_ref()
-            .map_or([0.0; 2], |g| g.vector(t))
+        ground_motion::vector(&self.scene.analysis.ground_motion, t)
+    }
+
+    /// x − ι g: a velocity or acceleration of the unknowns relative to the ground's `g`
+    /// (the unknowns' own in the relative frame, where it is returned unchanged).
+    fn relative(&self, x: &[f64], g: [f64; 2]) -> Vec<f64> {
+        self.shifted(x, g, -1.0)
+    }
+
+    /// x + ι g in the absolute frame (unchanged in the relative frame).
+    fn absolute_from_relative(&self, x: &[f64], g: [f64; 2]) -> Vec<f64> {
+        self.shifted(x, g, 1.0)
+    }
+
+    fn shifted(&self, x: &[f64], g: [f64; 2], sign: f64) -> Vec<f64> {
+        if !self.settings.absolute {
+            return x.to_vec();
+        }
+        (0..x.len())
+            .map(|i| x[i] + sign * (self.iota[0][i] * g[0] + self.iota[1][i] * g[1]))
+            .collect()
+    }
+
+    /// ιᵀ f: the x and y resultants (N) of a force on the unknowns (the rotations of
+    /// rigid blocks left out).
+    fn resultant(&self, f: &[f64]) -> [f64; 2] {
+        [dot(&self.iota[0], f), dot(&self.iota[1], f)]
     }
 
     /// Ground-motion load −M ι a_g(t) (N).
@@ -800,7 +853,21 @@ impl<'a> Dynamics<'a> {
     }
 
     fn trial(&self, dq: &[f64]) -> Trial {
-        let presc = vec![[0.0; 2]; self.cur.blocks.len()];
+        self.trial_moving(dq, [0.0; 2])
+    }
+
+    /// A trial increment `dq` of the free unknowns with the fixed blocks moved by `dug`
+    /// (m): the ground's motion over a step in the absolute frame.
+    fn trial_moving(&self, dq: &[f64], dug: [f64; 2]) -> Trial {
+        let presc: Vec<Point> = self
+            .cur
+            .blocks
+            .iter()
+            .map(|b| match b.dofs {
+                BlockDofs::Fixed => dug,
+                _ => [0.0; 2],
+            })
+            .collect();
         evaluate(
             &self.system,
             &self.cur,
@@ -827,6 +894,7 @@ impl<'a> Dynamics<'a> {
             gamma,
             c0,
             h,
+            vg1,
             ..
         } = *k;
         let [ra0, ra1] = self.settings.rayleigh;
@@ -840,7 +908,9 @@ impl<'a> Dynamics<'a> {
         } else {
             dq.iter().map(|d| d / h).collect()
         };
-        let mut fv1: Vec<f64> = (0..n).map(|i| ra0 * self.mass[i] * v1[i]).collect();
+        // the damping acts on the velocity relative to the ground
+        let v1r = self.relative(&v1, vg1);
+        let mut fv1: Vec<f64> = (0..n).map(|i| ra0 * self.mass[i] * v1r[i]).collect();
         if ra1 > 0.0 {
             // stiffness-proportional damping with the secant stiffness of the trial states
             let local: Vec<LocalStiffness> = (0..self.springs.len())
@@ -849,7 +919,7 @@ impl<'a> Dynamics<'a> {
             self.system
                 .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
             let mut kv = vec![0.0; n];
-            self.kbuf.mul_vec(&v1, &mut kv);
+            self.kbuf.mul_vec(&v1r, &mut kv);
             for (f, x) in fv1.iter_mut().zip(&kv) {
                 *f += ra1 * x;
             }
@@ -877,7 +947,7 @@ impl<'a> Dynamics<'a> {
                 .collect();
             self.system.damping_into(&trial.mesh, &lc, cbuf);
             let mut cv = vec![0.0; n];
-            cbuf.mul_vec(&v1, &mut cv);
+            cbuf.mul_vec(&v1r, &mut cv);
             for (f, x) in fv1.iter_mut().zip(&cv) {
                 *f += x;
             }
@@ -927,10 +997,28 @@ impl<'a> Dynamics<'a> {
         let n = self.cur.n_dofs;
         let t0 = self.time;
         let (g0, g1) = (self.ground(t0), self.ground(t0 + h));
-        let (fg0, fg1) = (self.f_ground(g0), self.f_ground(g1));
-        let fe: Vec<f64> = (0..n)
-            .map(|i| self.f_static[i] + (1.0 - af) * fg1[i] + af * fg0[i])
-            .collect();
+        let absolute = self.settings.absolute;
+        let fe: Vec<f64> = if absolute {
+            // the ground reaches the blocks through the contacts of the moving foundation
+            self.f_static.clone()
+        } else {
+            let (fg0, fg1) = (self.f_ground(g0), self.f_ground(g1));
+            (0..n)
+                .map(|i| self.f_static[i] + (1.0 - af) * fg1[i] + af * fg0[i])
+                .collect()
+        };
+        // the foundation's motion over the step by the scheme's Newmark relations, the
+        // same ones as the blocks' (absolute frame; with Newmark's average acceleration
+        // the run then equals the relative frame's to round-off)
+        let (dug, vg1) = if absolute {
+            let vg = self.ground_v;
+            (
+                [0, 1].map(|c| h * vg[c] + h * h * ((0.5 - beta) * g0[c] + beta * g1[c])),
+                [0, 1].map(|c| vg[c] + h * ((1.0 - gamma) * g0[c] + gamma * g1[c])),
+            )
+        } else {
+            ([0.0; 2], [0.0; 2])
+        };
         let c0 = if inertia { 1.0 / (beta * h * h) } else { 0.0 };
         let c1 = gamma / (beta * h);
         let terms = StepTerms {
@@ -941,11 +1029,13 @@ impl<'a> Dynamics<'a> {
             c0,
             h,
             fe,
+            vg1,
         };
-        // start from the committed state (the first solve is the linearized step: a
-        // predictor that moves stiff contacts would start far from the answer)
-        let mut dq: Vec<f64> = vec![0.0; n];
-        let mut trial = self.trial(&dq);
+        // start from the committed state carried along by the ground (the first solve is
+        // the linearized step: a predictor that moves stiff contacts would start far
+        // from the answer)
+        let mut dq: Vec<f64> = self.absolute_from_relative(&vec![0.0; n], dug);
+        let mut trial = self.trial_moving(&dq, dug);
         let mut prev_state = trial.state.clone();
         let mut prev_force = trial.force.clone();
         let mut flips = vec![0u32; trial.state.len()];
@@ -1041,6 +1131,8 @@ impl<'a> Dynamics<'a> {
                     f_visc: bal.fv1,
                     h,
                     ground: g1,
+                    ground_du: dug,
+                    ground_v1: vg1,
                     frozen,
                 }));
             }
@@ -1109,7 +1201,7 @@ impl<'a> Dynamics<'a> {
                     }
                     break;
                 }
-                let mut t = self.trial(&cand);
+                let mut t = self.trial_moving(&cand, dug);
                 hold_open(&mut t, &frozen);
                 let b = self.balance(&terms, &cand, &t);
                 let decreased = b.rn <= bal.rn;
@@ -1170,15 +1262,36 @@ impl<'a> Dynamics<'a> {
             f_visc,
             h,
             ground,
+            ground_du,
+            ground_v1,
             ..
         } = acc;
         let dq = &trial.dq;
         let g0 = self.ground(self.time);
-        let (fg0, fg1) = (self.f_ground(g0), self.f_ground(ground));
+        let (work_ground, viscous) = if self.settings.absolute {
+            // the foundation's work through the contacts that touch it: −Δu_g · ιᵀ(F_int +
+            // C v)ₘ (the internal and viscous forces of everything else have no
+            // resultant); the dissipation is that of the motion relative to the ground
+            let dq_rel = self.relative(dq, ground_du);
+            let mean: Vec<f64> = (0..dq.len())
+                .map(|i| 0.5 * (self.f_int[i] + self.f_visc[i] + trial.f_int[i] + f_visc[i]))
+                .collect();
+            let r = self.resultant(&mean);
+            (
+                -(ground_du[0] * r[0] + ground_du[1] * r[1]),
+                0.5 * (dot(&dq_rel, &self.f_visc) + dot(&dq_rel, &f_visc)),
+            )
+        } else {
+            let (fg0, fg1) = (self.f_ground(g0), self.f_ground(ground));
+            (
+                0.5 * (dot(dq, &fg0) + dot(dq, &fg1)),
+                0.5 * (dot(dq, &self.f_visc) + dot(dq, &f_visc)),
+            )
+        };
         let e = &mut self.energy;
         e.work_static += dot(dq, &self.f_static);
-        e.work_ground += 0.5 * (dot(dq, &fg0) + dot(dq, &fg1));
-        e.viscous += 0.5 * (dot(dq, &self.f_visc) + dot(dq, &f_visc));
+        e.work_ground += work_ground;
+        e.viscous += viscous;
         // friction: the shear force's work beyond its elastic energy (the normal band
         // with its opening is elastic: no dissipation)
         let mut contact = 0.0;
@@ -1221,6 +1334,8 @@ impl<'a> Dynamics<'a> {
         self.a = a;
         self.f_visc = f_visc;
         self.time += h;
+        self.ground_u = [0, 1].map(|c| self.ground_u[c] + ground_du[c]);
+        self.ground_v = ground_v1;
         self.stats.increments += 1;
     }
 
@@ -1257,8 +1372,11 @@ impl<'a> Dynamics<'a> {
             return 0.0;
         }
         let c = h * h * (self.settings.scheme.beta - 1.0 / 6.0);
-        let e: Vec<f64> = acc
-            .a
+        // of the motion relative to the ground (the foundation's own is exact)
+        let g0 = self.ground(self.time);
+        let da = [acc.ground[0] - g0[0], acc.ground[1] - g0[1]];
+        let e: Vec<f64> = self
+            .relative(&acc.a, da)
             .iter()
             .zip(&self.a)
             .map(|(a1, a0)| c * (a1 - a0))
@@ -1426,30 +1544,31 @@ impl<'a> Dynamics<'a> {
             BlockDofs::Rigid { first, .. } => {
                 let f = first as usize;
                 let u = &self.committed.u;
-                ([u[f], u[f + 1]], u[f + 2])
+                let g = self.ground_u;
+                ([u[f] - g[0], u[f + 1] - g[1]], u[f + 2])
             }
             _ => {
                 let blk = &self.mesh0.blocks[b];
                 let disp: Vec<Point> = blk
                     .nodes
                     .clone()
-                    .map(|n| {
-                        let (p, q) = (self.cur.nodes[n as usize], self.mesh0.nodes[n as usize]);
-                        [p[0] - q[0], p[1] - q[1]]
-                    })
+                    .map(|n| self.node_displacement(n as usize))
                     .collect();
                 fit_motion(self.mesh0, b, &disp)
             }
         }
     }
 
+    /// Displacement (m) of node `n` relative to the ground (in the absolute frame, its
+    /// motion less the foundation's).
+    fn node_displacement(&self, n: usize) -> Point {
+        let (p, q, g) = (self.cur.nodes[n], self.mesh0.nodes[n], self.ground_u);
+        [p[0] - q[0] - g[0], p[1] - q[1] - g[1]]
+    }
+
     fn outcome(&self, status: Status) -> Outcome {
-        let node_disp = self
-            .cur
-            .nodes
-            .iter()
-            .zip(&self.mesh0.nodes)
-            .map(|(a, b)| [a[0] - b[0], a[1] - b[1]])
+        let node_disp = (0..self.cur.nodes.len())
+            .map(|n| self.node_displacement(n))
             .collect();
         Outcome {
             status,
@@ -1500,6 +1619,10 @@ pub const EXTRA_COLUMNS: &[&str] = &[
     "W_ground",
     "E_error",
 ];
+
+/// Columns added in the absolute frame (`frame = "absolute"`): the ground's displacement
+/// (m), integrated from a_g along the steps.
+pub const ABSOLUTE_COLUMNS: &[&str] = &["ground_ux", "ground_uy"];
 
 /// The time (s) at the end of step `k` of a run with time step `dt` lasting `duration`.
 pub fn step_time(settings: &Settings, k: usize) -> f64 {
@@ -1580,6 +1703,9 @@ pub fn run_from(
         }
     }
     columns.extend(EXTRA_COLUMNS.iter().map(|s| s.to_string()));
+    if d.settings.absolute {
+        columns.extend(ABSOLUTE_COLUMNS.iter().map(|s| s.to_string()));
+    }
     monitor.start(&columns)?;
     let mut history = History {
         columns,
@@ -1607,6 +1733,9 @@ pub fn run_from(
             e.work_ground,
             e.error(),
         ]);
+        if d.settings.absolute {
+            r.extend(d.ground_u);
+        }
         r
     };
     let steps = step_count(&d.settings);

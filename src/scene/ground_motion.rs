@@ -29,6 +29,19 @@ impl Direction {
     }
 }
 
+/// How the ground motion enters a dynamic analysis (`[analysis] frame`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Frame {
+    /// The frame of the ground: the fixed blocks stay put and the free blocks carry the
+    /// load −M ι a_g(t) (METHOD.md §6). The default.
+    #[default]
+    Relative,
+    /// A fixed frame: the fixed blocks (the foundation) move with the ground, their
+    /// displacement u_g(t) integrated from a_g along the time steps, and the free blocks
+    /// follow through their contacts alone (docs/theory.md "Ground motion").
+    Absolute,
+}
+
 /// Where the accelerations come from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Source {
@@ -114,8 +127,57 @@ fn number(v: &toml::Value) -> Option<f64> {
     v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
 }
 
-/// Read `ground_motion = { ... }`. Relative file names are taken from `base` (the scene
-/// file's directory).
+/// The ground acceleration vector (m/s²) at time t of a set of components (one per
+/// direction; none: no shaking).
+pub fn vector(components: &[GroundMotion], t: f64) -> [f64; 2] {
+    let mut v = [0.0; 2];
+    for g in components {
+        v[g.direction.index()] += g.acceleration(t);
+    }
+    v
+}
+
+/// Read `ground_motion`: one table `{ ... }` (one component), or an array of them, one per
+/// direction (`[{ ..., direction = "x" }, { ..., direction = "y" }]`: the horizontal and
+/// vertical components of a record shaking together). Relative file names are taken from
+/// `base` (the scene file's directory). An error in the k-th table of an array says so.
+pub fn components_from_toml(
+    v: &toml::Value,
+    base: Option<&Path>,
+) -> Result<Vec<GroundMotion>, MotionError> {
+    let Some(arr) = v.as_array() else {
+        return Ok(vec![from_toml(v, base)?]);
+    };
+    if arr.is_empty() {
+        return Err(merr(
+            "'ground_motion' is an empty array",
+            "give one table per direction, for example ground_motion = [{ file = \"ns.AT2\", direction = \"x\" }, { file = \"up.AT2\", direction = \"y\" }], or remove the key",
+        ));
+    }
+    let mut out: Vec<GroundMotion> = Vec::with_capacity(arr.len());
+    for (k, item) in arr.iter().enumerate() {
+        let g = from_toml(item, base).map_err(|e| MotionError {
+            what: format!("component #{} of {}: {}", k + 1, arr.len(), e.what),
+            ..e
+        })?;
+        if out.iter().any(|o| o.direction == g.direction) {
+            let d = if g.direction == Direction::X {
+                "x"
+            } else {
+                "y"
+            };
+            return Err(merr(
+                format!("component #{} of ground_motion is a second one along {d}", k + 1),
+                "give at most one component per direction (direction = \"x\" and direction = \"y\"); scale or combine records before",
+            ));
+        }
+        out.push(g);
+    }
+    Ok(out)
+}
+
+/// Read one `ground_motion = { ... }` table. Relative file names are taken from `base`
+/// (the scene file's directory).
 pub fn from_toml(v: &toml::Value, base: Option<&Path>) -> Result<GroundMotion, MotionError> {
     let t = v.as_table().ok_or_else(|| {
         merr(

@@ -170,8 +170,11 @@ pub struct Analysis {
     /// Dynamic: time step and duration, s.
     pub dt: Option<f64>,
     pub duration: Option<f64>,
-    /// Dynamic: the ground acceleration (`ground_motion`), if any.
-    pub ground_motion: Option<ground_motion::GroundMotion>,
+    /// Dynamic: the ground acceleration (`ground_motion`), one component per direction
+    /// shaken (empty: none).
+    pub ground_motion: Vec<ground_motion::GroundMotion>,
+    /// Dynamic: the frame the ground motion enters (`frame`).
+    pub frame: ground_motion::Frame,
     /// The `[analysis]` keys not interpreted by the foundation (ground motion, strategies);
     /// kept verbatim for the drivers that read them.
     pub extra: toml::Table,

@@ -134,6 +134,7 @@ pub const ANALYSIS_KEYS: &[&str] = &[
     "dt",
     "duration",
     "ground_motion",
+    "frame",
     "strategy",
     "tolerance",
     "max_iterations",
@@ -1170,7 +1171,8 @@ fn parse_analysis(
             direction: 1.0,
             dt: None,
             duration: None,
-            ground_motion: None,
+            ground_motion: Vec::new(),
+            frame: ground_motion::Frame::Relative,
             extra: toml::Table::new(),
         });
     };
@@ -1283,14 +1285,14 @@ fn parse_analysis(
         }
     }
     let ground_motion = match t.get("ground_motion") {
-        None => None,
+        None => Vec::new(),
         Some(v) => {
             // relative record names are taken from the scene's directory (not for
             // built-in scenes, named "example:NAME")
             let base = file
                 .filter(|f| f.exists())
                 .map(|f| f.parent().unwrap_or(Path::new("")).to_path_buf());
-            let gm = ground_motion::from_toml(v, base.as_deref()).map_err(|e| {
+            let gm = ground_motion::components_from_toml(v, base.as_deref()).map_err(|e| {
                 let place = match &e.at {
                     Some((f, Some(l))) => {
                         format!("[analysis] ground_motion: record {}:{l}", f.display())
@@ -1308,7 +1310,7 @@ fn parse_analysis(
                     "set type = \"dynamic\" with dt and duration, or remove ground_motion",
                 ));
             }
-            Some(gm)
+            gm
         }
     };
     let mut extra = t.clone();
@@ -1320,9 +1322,46 @@ fn parse_analysis(
         "dt",
         "duration",
         "ground_motion",
+        "frame",
     ] {
         extra.remove(k);
     }
+    let frame = match t.get("frame") {
+        None => ground_motion::Frame::Relative,
+        Some(v) => {
+            let f = match v.as_str() {
+                Some("relative") => ground_motion::Frame::Relative,
+                Some("absolute") => ground_motion::Frame::Absolute,
+                _ => {
+                    return Err(err_at(
+                        src.key_line(at, "frame"),
+                        "[analysis] key 'frame'",
+                        "unknown frame",
+                        "write frame = \"relative\" (default: the ground motion as the load −M ι a_g on the free blocks) or \"absolute\" (the fixed blocks move with the ground)",
+                    ))
+                }
+            };
+            if kind != AnalysisType::Dynamic {
+                return Err(err_at(
+                    src.key_line(at, "frame"),
+                    "[analysis] key 'frame'",
+                    "a frame of the ground motion needs type = \"dynamic\"",
+                    "set type = \"dynamic\", or remove frame",
+                ));
+            }
+            if f == ground_motion::Frame::Absolute
+                && t.get("inertia").and_then(|v| v.as_bool()) == Some(false)
+            {
+                return Err(err_at(
+                    src.key_line(at, "frame"),
+                    "[analysis] key 'frame'",
+                    "frame = \"absolute\" needs the inertia: without it the ground's motion reaches the blocks only as the body force of the relative frame",
+                    "remove frame (the relative frame), or set inertia = true",
+                ));
+            }
+            f
+        }
+    };
     Ok(Analysis {
         kind,
         lateral,
@@ -1331,6 +1370,7 @@ fn parse_analysis(
         dt,
         duration,
         ground_motion,
+        frame,
         extra,
     })
 }

@@ -191,3 +191,80 @@ pub fn assert_ffi_backends_match_faer(sc: &Scene, petsc_options: &str) {
         );
     }
 }
+
+/// The record (t_i, a_i) linearly interpolated at x, zero after its end.
+pub fn interpolate(t: &[f64], a: &[f64], x: f64) -> f64 {
+    if x >= t[t.len() - 1] {
+        return 0.0;
+    }
+    let k = t.partition_point(|&s| s <= x).clamp(1, t.len() - 1);
+    let w = (x - t[k - 1]) / (t[k] - t[k - 1]);
+    a[k - 1] + w * (a[k] - a[k - 1])
+}
+
+/// Rigid-plastic sliding block on a moving base (two-way, Coulomb μ; Newmark 1965's
+/// model) under the ground accelerations `ax(t)` and `ay(t)` (m/s², y up, gravity 9.81
+/// m/s² down): the normal force is m (g + a_y) and the block slides relative to the
+/// ground when |a_x| exceeds μ (g + a_y). Explicit integration with a step of 10⁻⁴ s and
+/// the exact stick test. Returns the largest |x| and the final x (m) of the block
+/// relative to the ground.
+pub fn rigid_plastic_sliding(
+    ax: impl Fn(f64) -> f64,
+    ay: impl Fn(f64) -> f64,
+    mu: f64,
+    duration: f64,
+) -> (f64, f64) {
+    let g = 9.81;
+    let dt = 1e-4;
+    let (mut x, mut v, mut xmax) = (0.0f64, 0.0f64, 0.0f64);
+    let steps = (duration / dt).round() as usize;
+    for k in 0..steps {
+        let tm = (k as f64 + 0.5) * dt;
+        let a = ax(tm);
+        let limit = mu * (g + ay(tm));
+        // relative frame: inertial force −m a_g; friction μ N against the sliding
+        let dv = if v == 0.0 {
+            if a.abs() <= limit {
+                0.0
+            } else {
+                (-a - limit * (-a).signum()) * dt
+            }
+        } else {
+            let nv = v + (-a - limit * v.signum()) * dt;
+            if nv * v < 0.0 {
+                // the block stops within the step
+                -v
+            } else {
+                nv - v
+            }
+        };
+        let v0 = v;
+        v += dv;
+        x += 0.5 * (v0 + v) * dt;
+        xmax = xmax.max(x.abs());
+    }
+    (xmax, x)
+}
+
+/// A rigid 1 m × 0.5 m box on a fixed base 40 m wide (the base moves with the ground in
+/// the absolute frame), friction tan φ = `mu`.
+pub fn box_on_base(mu: f64, analysis: &str) -> String {
+    format!(
+        r#"{}
+[[block]]
+name = "base"
+material = "rock"
+support = "fixed"
+vertices = [[-20.0, -1.0], [20.0, -1.0], [20.0, 0.0], [-20.0, 0.0]]
+[[block]]
+name = "box"
+material = "rock"
+kind = "rigid"
+vertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]
+[output]
+track = ["box"]
+vtk = false
+{analysis}"#,
+        rock_and_joint(mu.atan().to_degrees())
+    )
+}

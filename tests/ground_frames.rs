@@ -11,17 +11,8 @@
 
 mod common;
 use common::col;
-use dfem::analysis::dynamics::History;
-use dfem::analysis::Status;
 
 const G: f64 = 9.81;
-
-fn run(text: &str) -> History {
-    let sc = common::scene(text);
-    let (_, out) = common::solve(&sc);
-    assert_eq!(out.status, Status::Stable, "{:?}", out.status);
-    out.history.expect("a dynamic run has a history")
-}
 
 #[test]
 fn horizontal_and_vertical_components_shake_together() {
@@ -48,7 +39,7 @@ fn horizontal_and_vertical_components_shake_together() {
                     "[analysis]\ntype = \"dynamic\"\ndt = 0.01\nduration = {t_end}\nground_motion = {gm}\nframe = \"{frame}\"\n"
                 ),
             );
-            let h = run(&text);
+            let h = common::dynamic_history(&text);
             let ux = *col(&h, "box.ux").last().unwrap();
             let uy = *col(&h, "box.uy").last().unwrap();
             let ay_of = |t: f64| if vertical { ay * G * ramp(t) } else { 0.0 };
@@ -80,7 +71,7 @@ fn frames_agree_to_round_off_before_the_box_slips() {
         "/tests/data/elcentro1940_NS_g_dt0.02.csv"
     );
     let run_in = |frame: &str| {
-        run(&common::box_on_base(
+        common::dynamic_history(&common::box_on_base(
             0.2,
             &format!(
                 r#"[analysis]

@@ -23,10 +23,7 @@ use dfem::analysis::Status;
 const G: f64 = 9.81;
 
 fn run(text: &str) -> History {
-    let sc = common::scene(text);
-    let (_, out) = common::solve(&sc);
-    assert_eq!(out.status, Status::Stable, "{:?}", out.status);
-    out.history.expect("a dynamic run has a history")
+    common::dynamic_history(text)
 }
 
 use common::col;

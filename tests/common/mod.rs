@@ -268,3 +268,16 @@ vtk = false
         rock_and_joint(mu.atan().to_degrees())
     )
 }
+
+/// Run a dynamic scene that must complete; its history.
+pub fn dynamic_history(text: &str) -> dfem::analysis::dynamics::History {
+    let sc = scene(text);
+    let (_, out) = solve(&sc);
+    assert_eq!(
+        out.status,
+        dfem::analysis::Status::Stable,
+        "{:?}",
+        out.status
+    );
+    out.history.expect("a dynamic run has a history")
+}

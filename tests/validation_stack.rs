@@ -78,8 +78,13 @@ fn settlement(k: usize, rigid: bool) -> f64 {
     joints + GAMMA / e_eff * mean
 }
 
-fn check(kind: &str, tol: f64) {
-    let sc = common::scene(&scene(kind));
+fn check(kind: &str, tol: f64) -> dfem::analysis::Outcome {
+    check_with(kind, "", tol)
+}
+
+/// [`check`] with `analysis` (an `[analysis]` table) appended to the scene.
+fn check_with(kind: &str, analysis: &str, tol: f64) -> dfem::analysis::Outcome {
+    let sc = common::scene(&(scene(kind) + analysis));
     let (m, out) = common::solve(&sc);
     assert_eq!(out.status, Status::Stable);
     for k in 0..N {
@@ -93,6 +98,7 @@ fn check(kind: &str, tol: f64) {
         );
         assert!(err < tol, "block {k}: error {err}");
     }
+    out
 }
 
 #[test]
@@ -103,7 +109,18 @@ fn deformable_stack_settles_as_closed_form() {
 #[test]
 fn rigid_stack_settles_as_joint_springs() {
     // rigid blocks: only the joints deform, exactly
-    check("rigid", 1e-9);
+    let out = check("rigid", 1e-9);
+    assert_eq!(out.stats.increments, 10, "load_steps' default");
+}
+
+#[test]
+fn gravity_in_one_increment_settles_the_same() {
+    // `gravity_steps`: the same closed form reached in one increment (a stack that stands
+    // under gravity is linear)
+    let out = check_with("rigid", "[analysis]\ngravity_steps = 1\n", 1e-9);
+    assert_eq!(out.stats.increments, 1);
+    let out = check_with("deformable", "[analysis]\ngravity_steps = 1\n", 0.005);
+    assert_eq!(out.stats.increments, 1);
 }
 
 /// MUMPS and PETSc (cargo features) give faer's displacements on both stacks.

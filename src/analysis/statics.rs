@@ -188,6 +188,7 @@ pub const KEYS: &[&str] = &[
     "line_search",
     "push_block",
     "push_displacement",
+    "gravity_steps",
 ];
 
 /// The loads of one phase as functions of its load factor.
@@ -1003,6 +1004,10 @@ pub fn run_with_progress<'a>(
     let mut d = Driver::new(scene, mesh, backend)?;
     d.progress = Some(progress);
     let steps = scene.analysis.load_steps;
+    // increments of the gravity phase (`gravity_steps`, default `load_steps`): gravity on
+    // a structure that stands is nearly linear and needs few
+    let gravity_steps =
+        super::analysis_number(scene, "gravity_steps", steps as f64, 1.0, 1e6)?.round() as usize;
     let g = scene.model.gravity;
     let gnorm = g[0].hypot(g[1]);
     let n = mesh.n_dofs;
@@ -1089,8 +1094,8 @@ pub fn run_with_progress<'a>(
         pin_step: Vec::new(),
         record: None,
     };
-    d.begin_phase("gravity", Some(steps), 1.0);
-    let (s, why) = d.run_phase(&phase, steps)?;
+    d.begin_phase("gravity", Some(gravity_steps), 1.0);
+    let (s, why) = d.run_phase(&phase, gravity_steps)?;
     if let Some(why) = why {
         return Ok(fail(
             &mut d,

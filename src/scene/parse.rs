@@ -144,6 +144,7 @@ pub const ANALYSIS_KEYS: &[&str] = &[
     "line_search",
     "push_block",
     "push_displacement",
+    "gravity_steps",
     "integrator",
     "alpha",
     "rho_inf",

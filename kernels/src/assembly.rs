@@ -10,7 +10,7 @@
 
 use crate::csr::{CsrMatrix, CsrPattern, ROW_CHUNK};
 use rayon::prelude::*;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// A dof slot that is not an unknown (for example a fixed support): the rows and columns
 /// of an element matrix (and the entries of an element vector) at such a slot are
@@ -82,6 +82,23 @@ pub struct AssemblyPlan {
     vgather_pos: Vec<usize>,
     /// For CSR entry k = (i, j), the position of (j, i).
     transpose: Vec<usize>,
+    /// Buffers reused by every assembly with this plan, so that an assembly allocates
+    /// nothing: on a wall of 786,080 triangles a fresh 242 MB element buffer and a fresh
+    /// array of sums per assembly spent more time in page faults than in the kernels
+    /// (benches/assembly.rs: 0.274 s per assembly on 2 threads before, see
+    /// docs/performance.md "Assembly").
+    scratch: Mutex<Scratch>,
+}
+
+/// See [`AssemblyPlan`]'s `scratch`.
+#[derive(Debug, Default)]
+struct Scratch {
+    /// Element matrices (`mat_offset`) and element vectors (`vec_offset`).
+    mat: Vec<f64>,
+    vec: Vec<f64>,
+    /// Every stored entry's sum of contributions (the symmetric assembly averages it
+    /// with its transpose's).
+    sums: Vec<f64>,
 }
 
 /// What one chunk of rows contributes while the plan is built.
@@ -270,6 +287,7 @@ impl AssemblyPlan {
             gather_pos,
             vgather_ptr,
             vgather_pos,
+            scratch: Mutex::new(Scratch::default()),
         }
     }
 
@@ -306,7 +324,12 @@ impl AssemblyPlan {
     /// # Panics
     /// If `out` does not use this plan's pattern.
     pub fn assemble<F: Fn(usize, &mut [f64]) + Sync>(&self, kernel: F, out: &mut CsrMatrix) {
-        let sums = self.sums(&kernel, out);
+        self.check_pattern(out);
+        let mut scratch = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        let Scratch { mat, sums, .. } = &mut *scratch;
+        fill_element_buffer(&self.mat_offset, &kernel, mat);
+        sums.resize(self.pattern.nnz(), 0.0);
+        gather(&self.gather_ptr, &self.gather_pos, mat, sums);
         let t = &self.transpose;
         out.values
             .par_chunks_mut(ROW_CHUNK)
@@ -331,20 +354,23 @@ impl AssemblyPlan {
         kernel: F,
         out: &mut CsrMatrix,
     ) {
-        out.values = self.sums(&kernel, out);
+        self.check_pattern(out);
+        let mut scratch = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        fill_element_buffer(&self.mat_offset, &kernel, &mut scratch.mat);
+        gather(
+            &self.gather_ptr,
+            &self.gather_pos,
+            &scratch.mat,
+            &mut out.values,
+        );
     }
 
-    /// Every entry's sum of element contributions, in a fixed order.
-    fn sums<F: Fn(usize, &mut [f64]) + Sync>(&self, kernel: &F, out: &CsrMatrix) -> Vec<f64> {
+    fn check_pattern(&self, out: &CsrMatrix) {
         assert_eq!(
             out.pattern.id(),
             self.pattern.id(),
             "the matrix does not use the plan's pattern"
         );
-        let buf = fill_element_buffer(&self.mat_offset, kernel);
-        let mut sums = vec![0.0; self.pattern.nnz()];
-        gather(&self.gather_ptr, &self.gather_pos, &buf, &mut sums);
-        sums
     }
 
     /// Assembles a vector: `kernel(e, out)` fills element e's ne-vector (zeroed before the
@@ -359,18 +385,23 @@ impl AssemblyPlan {
             self.pattern.n(),
             "the vector has the wrong length"
         );
-        let buf = fill_element_buffer(&self.vec_offset, &kernel);
-        gather(&self.vgather_ptr, &self.vgather_pos, &buf, out);
+        let mut scratch = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        fill_element_buffer(&self.vec_offset, &kernel, &mut scratch.vec);
+        gather(&self.vgather_ptr, &self.vgather_pos, &scratch.vec, out);
     }
 }
 
-/// Runs the element kernels in parallel over fixed chunks of elements, each writing its
-/// own block of a zeroed buffer.
-fn fill_element_buffer<F: Fn(usize, &mut [f64]) + Sync>(offset: &[usize], kernel: &F) -> Vec<f64> {
+/// Runs the element kernels in parallel over fixed chunks of elements into `buf` (sized
+/// here), each element's block zeroed just before its kernel writes it.
+fn fill_element_buffer<F: Fn(usize, &mut [f64]) + Sync>(
+    offset: &[usize],
+    kernel: &F,
+    buf: &mut Vec<f64>,
+) {
     let n_el = offset.len() - 1;
-    let mut buf = vec![0.0; offset[n_el]];
+    buf.resize(offset[n_el], 0.0);
     let mut pieces: Vec<(usize, &mut [f64])> = Vec::with_capacity(n_el.div_ceil(ELEM_CHUNK));
-    let mut rest: &mut [f64] = &mut buf;
+    let mut rest: &mut [f64] = buf;
     let mut e0 = 0;
     while e0 < n_el {
         let e1 = (e0 + ELEM_CHUNK).min(n_el);
@@ -383,10 +414,11 @@ fn fill_element_buffer<F: Fn(usize, &mut [f64]) + Sync>(offset: &[usize], kernel
         let e1 = (e0 + ELEM_CHUNK).min(n_el);
         let base = offset[e0];
         for e in e0..e1 {
-            kernel(e, &mut piece[offset[e] - base..offset[e + 1] - base]);
+            let block = &mut piece[offset[e] - base..offset[e + 1] - base];
+            block.fill(0.0);
+            kernel(e, block);
         }
     });
-    buf
 }
 
 /// `out[k] = sum of buf[pos[ptr[k]..ptr[k + 1]]]`, summed in the stored order.

@@ -250,3 +250,44 @@ vertices = [[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]]
     assert_eq!(v["status"], "stable");
     assert_eq!(v["warnings"].as_array().unwrap().len(), 1);
 }
+
+/// The README's first set-up command, word for word after `cargo run --release --`, run
+/// in an empty directory as on a fresh machine: it writes the default scene's summary (the
+/// wall stands) and its figures.
+#[test]
+fn readme_quick_start_writes_the_summary_and_figures() {
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let line = readme
+        .lines()
+        .map(str::trim)
+        .find(|l| l.starts_with("cargo run --release -- "))
+        .expect("README.md gives the main job as `cargo run --release -- ...`");
+    let args: Vec<&str> = line["cargo run --release -- ".len()..]
+        .split_whitespace()
+        .collect();
+    let k = args.iter().position(|a| *a == "--out").expect("--out DIR");
+    let dir = common::tmp_dir("cli_readme");
+    let out = Command::new(common::dfem_bin())
+        .args(&args)
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{line}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let res = dir.join(args[k + 1]);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(res.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(v["status"], "stable", "{v}");
+    for f in [
+        "figures/deformed.png",
+        "figures/deformed.svg",
+        "blocks_0000.vtu",
+    ] {
+        let len = res.join(f).metadata().map(|m| m.len()).unwrap_or(0);
+        assert!(len > 1000, "{f}: {len} bytes");
+    }
+}

@@ -163,6 +163,13 @@ fn check_memory(sc: &scene::Scene, m: &mesh::Mesh, limit: Option<f64>) -> Result
 /// Entry point of the `dfem` binary.
 pub fn main() -> ExitCode {
     std::panic::set_hook(Box::new(|info| {
+        // stdout closed by the reader (`dfem check scene.toml | head`): not a bug; end as
+        // a program killed by SIGPIPE would (Rust ignores the signal, and `println!`
+        // panics on the write error instead)
+        let text = info.to_string();
+        if text.contains("failed printing to stdout") && text.contains("Broken pipe") {
+            std::process::exit(141);
+        }
         eprintln!("dfem: internal error ({info}); this is a bug, please report it with the scene that caused it");
     }));
     let cli = Cli::parse();

@@ -687,11 +687,14 @@ fn pseudo_dynamic_arch_fails_past_its_static_collapse_load() {
 ///   and 0.01 s) and the impacts dissipate less than 30 % of it by the end (measured
 ///   −9.5 % and −24 %: the HHT-α scheme's loss at impacts resolved by step cuts).
 ///
-/// The seed's Fig. 6b shows the right pier's top moving more under Acc. No. 1 than under
-/// No. 2 early on; with this arch (the seed does not give its dimensions) it is the
-/// other way round (13 against 52 mm at t = 1.5 s), so the test does not assert it.
+/// * the seed's Fig. 6b: the right pier's top moves much more under Acc. No. 1 than under
+///   No. 2 in the first seconds (largest |ux| over 0–3 s more than twice; measured 2.04
+///   against 0.55 m), though in the first 1.5 s the order is the other way (13 against
+///   50 mm at t = 1.5 s).
 #[test]
 fn arch_with_inertia_collapses_and_lands_under_acc_1_and_2() {
+    // the largest sideways motion of the right pier's top block in the first 3 s
+    let mut pier_top = Vec::new();
     for file in ["acc1_inertia.toml", "acc2_inertia.toml"] {
         let sc = common::scene(&seed_arch(file));
         let (m, out) = common::solve(&sc);
@@ -705,6 +708,12 @@ fn arch_with_inertia_collapses_and_lands_under_acc_1_and_2() {
         );
         let last = |c: &str| *col(&h, c).last().unwrap();
         assert!(last("v7.uy") < -1.0, "{file}: crown uy = {}", last("v7.uy"));
+        let ux = col(&h, "pier_r_4.ux");
+        pier_top.push(
+            (0..t.len())
+                .filter(|&k| t[k] <= 3.0 + 1e-9)
+                .fold(0.0f64, |m, k| m.max(ux[k].abs())),
+        );
         let band = 0.005;
         for (b, block) in m.blocks.iter().enumerate() {
             if block.dofs == dfem::mesh::BlockDofs::Fixed {
@@ -747,6 +756,16 @@ fn arch_with_inertia_collapses_and_lands_under_acc_1_and_2() {
             last("E_error")
         );
     }
+    // the seed's Fig. 6b: the side column moves "much more severe[ly] under Acc. No. 1 as
+    // compared with Acc. No. 2, especially in the early stage": the long pulse of Acc. No. 1
+    // (one-sided for π s) carries the right pier 2.0 m within 3 s, the alternating
+    // Acc. No. 2 0.55 m (measured). Before t ≈ 2 s the order is the other way (13 against
+    // 50 mm at 1.5 s), as Acc. No. 2's faster rise shakes the piers loose first.
+    eprintln!(
+        "right pier's top, largest |ux| in 0–3 s: {:.3} m (Acc. No. 1), {:.3} m (Acc. No. 2)",
+        pier_top[0], pier_top[1]
+    );
+    assert!(pier_top[0] > 2.0 * pier_top[1], "{pier_top:?}");
 }
 
 /// The error-controlled step (`adaptive_tolerance`): a rigid box set on its base with no

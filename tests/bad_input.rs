@@ -91,6 +91,9 @@ fn every_file_has_a_test() {
 
 cases! {
     softening_without_fracture_energy,
+    cap_without_softening,
+    cap_energy_without_peak,
+    within_unknown,
     tension_cut_off_beyond_apex,
     all_fixed,
     checkpoint_every_zero,

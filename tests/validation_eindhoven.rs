@@ -1,83 +1,349 @@
-//! The Eindhoven shear wall J4D (Raijmakers and Vermeltfoort 1992; BENCHMARKS.md V8), the
-//! built-in example `eindhoven`: 990 × 992 mm of expanded bricks (210 × 52 mm bricks,
-//! 10 mm joints, 16 free courses between a fixed base and a rigid steel beam), softening
-//! joints with the Lourenço and Rots (1997) data of BENCHMARKS.md V8 (kₙ = 82 N/mm³,
-//! kₛ = 36 N/mm³, fₜ = 0.25 N/mm², G_f^I = 0.018 N/mm, c = 0.35 N/mm², tan φ = 0.75,
-//! G_f^II = 0.125 N/mm; the numbers could not be checked against the papers with the
-//! tools at hand, they are taken from BENCHMARKS.md as given), pre-compression
-//! 0.30 N/mm² (29.7 kN), the beam pushed 4 mm with its rotation and vertical motion held.
+//! The Eindhoven shear walls (Raijmakers and Vermeltfoort 1992; BENCHMARKS.md V8) as the
+//! built-in examples `eindhoven` (J4D/J5D, 0.30 N/mm²), `eindhoven-j6d` (1.21 N/mm²) and
+//! `eindhoven-j7d` (2.12 N/mm²): the micro-model of Lourenço and Rots (1997), expanded
+//! bricks split at mid-length by potential cracks, softening mortar joints with the
+//! compression cap, a fixed base and a rigid beam pushed 4 mm with its rotation and
+//! vertical motion held.
 //!
-//! What is checked:
-//! * the load is followed through a peak and down the softening branch;
-//! * at the end the wall slides along a bed joint whose cohesion is spent: the load is
-//!   tan φ × the normal force on that joint, i.e. tan φ (P + R) with R the vertical force
-//!   the beam adds (the reaction of the held vertical motion), up to the weight of the
-//!   bricks above the sliding joint (at most the whole wall's 1.77 kN, × tan φ = 1.3 kN);
-//! * the peak against the experiment: Lourenço (1996) reports about 50 kN for J4D and
-//!   J5D. This model, with corner nodes only, no compression cap and no potential cracks
-//!   in the bricks, peaks at 60.7 kN (+21 %); the bound below (25 %) guards that figure,
-//!   it does not meet the issue's 10 % (docs/performance.md, "Eindhoven walls").
+//! Where each number comes from (the search tool of this project reaches only the
+//! opening pages of the sources, so most of them could not be checked against the text):
+//! * wall 990 × 1000 mm, 18 courses of 210 × 52 × 100 mm bricks with 10 mm joints, top
+//!   and bottom courses clamped in steel beams; pre-compressions 0.30, 1.21, 2.12 N/mm²;
+//!   bricks E = 16700 N/mm², ν = 0.15; joints kₙ = 82 N/mm³, kₛ = 36 N/mm³, fₜ = 0.25
+//!   N/mm², G_f^I = 0.018 N/mm, c = 0.35 N/mm², tan φ = 0.75, G_f^II = 0.125 N/mm,
+//!   fₘ = 10.5 N/mm², brick cracks fₜ = 2.0 N/mm²: BENCHMARKS.md V8 (which cites
+//!   Lourenço and Rots 1997); not verified against the paper.
+//! * the model itself (tension cut-off, Coulomb friction and an elliptical cap; tensile
+//!   and cohesion softening, compressive hardening/softening, tension–shear coupling):
+//!   confirmed by the abstracts of Lourenço, Rots and Blaauwendraad (1995, Heron 40) and
+//!   Lourenço and Rots (1997, J. Eng. Mech.), and the DIANA manual's composite interface
+//!   model page; the cap's C_ss = 9, G_fc = 5 N/mm, κₚ = 0.093 mm and the brick cracks'
+//!   G_f^I = 0.08 N/mm: recalled from Lourenço (1996), not verified.
+//! * wall names J4D/J5D (0.30), J6D (1.21), J7D (2.12): the issue and Lourenço (1996) as
+//!   recalled (the former example called the 1.21 and 2.12 walls J7D and J9D).
+//! * the top beam: "in a confined way, i.e. keeping the bottom and top boundaries
+//!   horizontal and precluding any vertical movement" (Lourenço 1996, as recalled). The
+//!   mechanics agrees: with its vertical motion free under the constant pre-compression
+//!   the wall in double curvature carries at most N L/h = 29.7 kN × 0.99 m / 1.0 m =
+//!   29.4 kN (dfem: 30.7 kN), far below the ≈50 kN measured, so the vertical motion was
+//!   restrained and the vertical force grew as the wall dilated.
+//! * the experimental peak of J4D/J5D, about 50 kN: Lourenço (1996) as the earlier
+//!   version of this test cited it; not verified. The peaks of J6D and J7D could not be
+//!   found with the tools at hand, and no test asserts them (docs/performance.md).
+//!
+//! The fast test runs J4D with bricks meshed at 0.052 m (half a brick's height) under
+//! displacement control to 1.5 mm: the peak (first maximum) within 10 % of 50 kN, and
+//! the failure pattern at the end. The ignored test runs the three walls at two meshes by
+//! arc length, prints the table of docs/performance.md and draws
+//! docs/figures/eindhoven_walls.{png,svg}:
+//!
+//!     cargo test --release --test validation_eindhoven -- --ignored --nocapture
 
 mod common;
-use dfem::analysis::Status;
+use dfem::analysis::{Outcome, Status};
+use dfem::mesh::Mesh;
+use dfem::scene::Scene;
+
+/// The experimental peak of J4D/J5D (N), see the header.
+const J4D_PEAK: f64 = 50e3;
+/// The compressive strength of the cap (Pa) and its initial yield value fₘ/3.
+const FC: f64 = 10.5e6;
+
+/// The built-in example `name` with the bricks meshed at `mesh` (m), pushed by `push`
+/// (m) in `steps` increments, by arc length or not.
+fn wall(name: &str, mesh: Option<f64>, push: f64, steps: usize, arc: bool) -> Scene {
+    let mut text = dfem::scene::examples::get(name)
+        .expect("a built-in example")
+        .to_string();
+    if let Some(m) = mesh {
+        text = text.replace(
+            "split_bricks = true\n",
+            &format!("split_bricks = true\nmesh_size = {m}\n"),
+        );
+    }
+    text = text
+        .replace(
+            "push_displacement = [0.004, 0.0]",
+            &format!("push_displacement = [{push}, 0.0]"),
+        )
+        .replace("load_steps = 80", &format!("load_steps = {steps}"));
+    if !arc {
+        text = text.replace("path = \"arc_length\"\n", "");
+    }
+    common::scene(&text)
+}
+
+/// The push curve: (top displacement m, horizontal load N, vertical force N).
+fn curve(out: &Outcome) -> Vec<[f64; 3]> {
+    let c = out.capacity_curve.as_ref().expect("the push curve");
+    let d0 = c.points[0].displacement[0];
+    c.points
+        .iter()
+        .map(|p| {
+            let r = p.reaction.expect("push points carry the force");
+            [p.displacement[0] - d0, r[0], r[1]]
+        })
+        .collect()
+}
+
+/// The first maximum of the load: the largest load before it falls by 0.2 % (N), its
+/// index. The held beam's vertical force grows as the wall dilates, and past the peak
+/// the load rises again with it (docs/performance.md); the arc-length curves are smooth
+/// to 10⁻⁵ of the load, far below the 0.2 %.
+fn first_peak(pts: &[[f64; 3]]) -> (usize, f64) {
+    let mut best = (0, 0.0);
+    for (i, p) in pts.iter().enumerate() {
+        if p[1] > best.1 {
+            best = (i, p[1]);
+        } else if p[1] < 0.998 * best.1 {
+            break;
+        }
+    }
+    best
+}
+
+/// The midpoint (m) of every contact in the final configuration, with its joint name.
+fn contacts(sc: &Scene, mesh: &Mesh, out: &Outcome) -> Vec<([f64; 2], String)> {
+    let cur = out.current.as_ref().unwrap_or(mesh);
+    cur.contacts
+        .iter()
+        .map(|c| {
+            let j = sc.joint_of(c.block_l as usize, c.block_m as usize);
+            (cur.nodes[c.node_m as usize], sc.joints[j].name.clone())
+        })
+        .collect()
+}
+
+/// Pearson's correlation of x and y over the points.
+fn correlation(p: &[[f64; 2]]) -> f64 {
+    let n = p.len() as f64;
+    let (mx, my) = (
+        p.iter().map(|q| q[0]).sum::<f64>() / n,
+        p.iter().map(|q| q[1]).sum::<f64>() / n,
+    );
+    let sxy: f64 = p.iter().map(|q| (q[0] - mx) * (q[1] - my)).sum();
+    let sxx: f64 = p.iter().map(|q| (q[0] - mx).powi(2)).sum();
+    let syy: f64 = p.iter().map(|q| (q[1] - my).powi(2)).sum();
+    sxy / (sxx * syy).sqrt()
+}
 
 #[test]
-fn eindhoven_wall_030_peaks_softens_and_ends_in_friction() {
-    let text = dfem::scene::examples::get("eindhoven").expect("the built-in example");
-    let sc = common::scene(text);
+fn eindhoven_j4d_peak_and_failure_pattern() {
+    let sc = wall("eindhoven", Some(0.052), 1.5e-3, 30, false);
     let (mesh, out) = common::solve(&sc);
-    assert_eq!(out.status, Status::Stable, "{:?}", out.status);
-    let c = out.capacity_curve.as_ref().expect("the push curve");
-    assert_eq!(sc.blocks[c.control_block].name, "beam");
-    let pts: Vec<([f64; 2], [f64; 3])> = c
-        .points
-        .iter()
-        .map(|p| (p.displacement, p.reaction.unwrap()))
-        .collect();
-    // the beam follows its path: 4 mm across, vertical motion held after the
-    // pre-compression, no rotation
-    let (d0, _) = pts[0];
-    let (d_end, r_end) = *pts.last().unwrap();
-    assert!((d_end[0] - d0[0] - 0.004).abs() < 1e-9, "{d_end:?}");
-    assert!((d_end[1] - d0[1]).abs() < 1e-12, "{d_end:?} {d0:?}");
+    let pts = curve(&out);
+    let (ip, peak) = first_peak(&pts);
+    eprintln!(
+        "J4D, bricks at 0.052 m: peak {:.2} kN at {:.3} mm, {} points to {:.3} mm ({:?})",
+        peak / 1e3,
+        pts[ip][0] * 1e3,
+        pts.len(),
+        pts.last().unwrap()[0] * 1e3,
+        out.status
+    );
+    // the potential cracks: exactly the contacts between the two halves of a brick take
+    // the brick's joint
+    for c in &mesh.contacts {
+        let (l, m) = (c.block_l as usize, c.block_m as usize);
+        let same = sc.blocks[l].unit.is_some() && sc.blocks[l].unit == sc.blocks[m].unit;
+        assert_eq!(sc.joints[sc.joint_of(l, m)].name == "brick", same);
+    }
+    // the beam's rotation is held, so its top stays horizontal
     let beam = sc.block_index("beam").unwrap();
     let (_, rot) = dfem::analysis::outcome_motion(&mesh, beam, &out);
-    // it rotates only elastically under the pre-compression (5e-9 rad) and is then held;
-    // the bricks turn by ~1e-3 rad
     assert!(rot.abs() < 1e-7, "the beam rotated by {rot}");
+    // the load is followed past its peak (the run may stop later, where the path snaps
+    // back under displacement control: docs/performance.md)
+    assert!(ip + 1 < pts.len(), "no peak within the push");
+    assert!(
+        matches!(out.status, Status::Stable) || pts.last().unwrap()[0] > 1.2e-3,
+        "{:?}",
+        out.status
+    );
+    // the peak against the experiment (header): 10 %
+    assert!(
+        (peak - J4D_PEAK).abs() < 0.1 * J4D_PEAK,
+        "peak {peak} N against the experimental {J4D_PEAK} N"
+    );
+    // the held beam takes a growing vertical force as the wall dilates (its
+    // compression, negative), of the order of the pre-compression at the peak
+    let fy = pts[ip][2];
+    assert!(
+        fy < -0.3 * 29.7e3 && fy > -3.0 * 29.7e3,
+        "vertical force {fy} N"
+    );
 
-    let (imax, peak) = pts
+    // failure pattern at the end: the open contacts inside the wall (not on the bed
+    // joints to the base and the beam) form a band from the top left to the bottom
+    // right (the diagonal stepped crack across joints and bricks), and the toes (bottom
+    // right, top left) are on the compression cap (|σ| ≥ fₘ/3 where it starts to yield)
+    let cs = contacts(&sc, &mesh, &out);
+    let t = sc.model.thickness;
+    let open: Vec<[f64; 2]> = cs
         .iter()
-        .enumerate()
-        .map(|(i, p)| (i, p.1[0]))
-        .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
-    let end = r_end[0];
+        .zip(&out.contact_states)
+        .filter(|((p, _), s)| {
+            **s == dfem::material::ContactState::Open && p[1] > 0.07 && p[1] < 0.92
+        })
+        .map(|((p, _), _)| *p)
+        .collect();
+    let rho = correlation(&open);
+    let through_bricks = cs
+        .iter()
+        .zip(&out.contact_states)
+        .filter(|((_, j), s)| j == "brick" && **s == dfem::material::ContactState::Open)
+        .count();
+    let stress = |k: usize| {
+        let c = &mesh.contacts[k];
+        out.contact_forces[k][0] / (c.length * t)
+    };
+    let toe = |x0: f64, x1: f64, y0: f64, y1: f64| {
+        (0..cs.len())
+            .filter(|&k| {
+                let p = cs[k].0;
+                p[0] >= x0 && p[0] <= x1 && p[1] >= y0 && p[1] <= y1
+            })
+            .map(stress)
+            .fold(0.0f64, f64::min)
+    };
+    let (bottom_right, top_left) = (toe(0.8, 1.0, -0.01, 0.07), toe(-0.01, 0.2, 0.92, 1.0));
     eprintln!(
-        "peak {:.2} kN at {:.3} mm; end {:.2} kN, vertical reaction {:.2} kN",
-        peak / 1e3,
-        (pts[imax].0[0] - d0[0]) * 1e3,
-        end / 1e3,
-        r_end[1] / 1e3
+        "{} open contacts inside, x–y correlation {rho:.2}; {through_bricks} open brick cracks; toes {:.2} and {:.2} MPa",
+        open.len(),
+        bottom_right / 1e6,
+        top_left / 1e6
     );
-    assert!(imax + 1 < pts.len(), "no peak within 4 mm");
+    assert!(open.len() >= 10, "{} open contacts", open.len());
     assert!(
-        end < 0.9 * peak,
-        "no softening branch: {end} N after {peak} N"
+        rho < -0.5,
+        "the open contacts do not form a falling diagonal: {rho}"
     );
+    assert!(
+        bottom_right < -FC / 3.0,
+        "bottom-right toe at {bottom_right} Pa"
+    );
+    assert!(top_left < -FC / 3.0, "top-left toe at {top_left} Pa");
+}
 
-    // residual friction on the sliding bed joint
-    let p = 0.30e6 * 0.99 * 0.1;
-    let normal = p - r_end[1];
-    let wall_weight = 18e3 * 0.99 * 0.992 * 0.1;
-    let friction = 0.75 * normal;
-    assert!(
-        (end - friction).abs() <= 0.75 * wall_weight + 1e-3 * friction,
-        "end load {end} N against tan φ × {normal} N = {friction} N"
-    );
+/// One run of the sweep: the wall, its bricks' mesh size (m), the curve and the stats.
+struct Run {
+    name: &'static str,
+    mesh: f64,
+    pts: Vec<[f64; 3]>,
+    out: Outcome,
+}
 
-    // the experiment: about 50 kN (Lourenço 1996, J4D/J5D)
-    assert!(
-        (peak - 50e3).abs() < 0.25 * 50e3,
-        "peak {peak} N against the experimental 50 kN"
+/// The three walls by arc length to 4 mm, bricks meshed at 0.052 m and 0.026 m, J4D
+/// also at 0.013 m: the table of docs/performance.md ("Eindhoven walls"), the figure
+/// docs/figures/eindhoven_walls.{png,svg}, and mesh independence of the first peak of
+/// J4D: 0.026 m against 0.013 m within 3 %.
+#[test]
+#[ignore = "a sweep of several minutes: run it with --ignored"]
+fn eindhoven_walls_sweep_table_and_figure() {
+    let mut runs: Vec<Run> = Vec::new();
+    let cases: [(&'static str, &[f64]); 3] = [
+        ("eindhoven", &[0.052, 0.026, 0.013]),
+        ("eindhoven-j6d", &[0.052, 0.026]),
+        ("eindhoven-j7d", &[0.052, 0.026]),
+    ];
+    for (name, meshes) in cases {
+        for &m in meshes {
+            let sc = wall(name, Some(m), 4e-3, 80, true);
+            let (_, out) = common::solve(&sc);
+            let pts = curve(&out);
+            let (ip, peak) = first_peak(&pts);
+            let last = pts.last().unwrap();
+            eprintln!(
+                "| {name} | {m} | {} / {} | {:.1} s | {:.1} kN at {:.2} mm | {:.1} kN at {:.2} mm | {} |",
+                out.stats.dofs,
+                out.stats.contacts,
+                out.stats.wall_time_s,
+                peak / 1e3,
+                pts[ip][0] * 1e3,
+                last[1] / 1e3,
+                last[0] * 1e3,
+                match &out.status {
+                    Status::Stable => "to 4 mm".to_string(),
+                    Status::Failed { reason, .. } => reason.clone(),
+                    s => format!("{s:?}"),
+                }
+            );
+            runs.push(Run {
+                name,
+                mesh: m,
+                pts,
+                out,
+            });
+        }
+    }
+    let peak_of = |name: &str, m: f64| {
+        let r = runs.iter().find(|r| r.name == name && r.mesh == m).unwrap();
+        first_peak(&r.pts).1
+    };
+    let (p052, p026, p013) = (
+        peak_of("eindhoven", 0.052),
+        peak_of("eindhoven", 0.026),
+        peak_of("eindhoven", 0.013),
     );
+    eprintln!(
+        "J4D first peaks: {:.2} / {:.2} / {:.2} kN (0.052 / 0.026 / 0.013 m): changes {:.1} % and {:.1} %",
+        p052 / 1e3,
+        p026 / 1e3,
+        p013 / 1e3,
+        100.0 * (p026 - p052) / p052,
+        100.0 * (p013 - p026) / p026
+    );
+    // the figure: the finer of the two meshes of each wall solid, the coarser dashed,
+    // and the J4D/J5D peak ± 10 % (the J6D and J7D peaks could not be found: header)
+    let names = [
+        ("eindhoven", "J4D/J5D, 0.30 N/mm²"),
+        ("eindhoven-j6d", "J6D, 1.21 N/mm²"),
+        ("eindhoven-j7d", "J7D, 2.12 N/mm²"),
+    ];
+    let mut curves = Vec::new();
+    for (c, (name, label)) in names.iter().enumerate() {
+        for (m, dashed) in [(0.026, false), (0.052, true)] {
+            let r = runs
+                .iter()
+                .find(|r| r.name == *name && r.mesh == m)
+                .unwrap();
+            curves.push(dfem::output::plot::CurveSeries {
+                label: format!("dfem {label}, bricks at {} mm", m * 1e3),
+                points: r.pts.iter().map(|p| (p[0] * 1e3, p[1] / 1e3)).collect(),
+                color: c,
+                dashed,
+            });
+        }
+    }
+    let bands = [dfem::output::plot::Band {
+        label: "J4D/J5D experiment, about 50 kN (Lourenço 1996), ± 10 %".into(),
+        load: J4D_PEAK / 1e3,
+        width: 0.1,
+        color: 0,
+    }];
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/figures");
+    for ext in ["png", "svg"] {
+        dfem::output::plot::load_displacement_chart(
+            &dir.join(format!("eindhoven_walls.{ext}")),
+            "Eindhoven shear walls: horizontal load against top displacement (held beam)",
+            &curves,
+            &bands,
+        )
+        .unwrap();
+    }
+    for r in &runs {
+        assert!(
+            r.pts.len() > 10,
+            "{} {}: {:?}",
+            r.name,
+            r.mesh,
+            r.out.status
+        );
+    }
+    // halving the bricks' mesh from 0.026 m to 0.013 m changes the first peak by < 3 %
+    assert!(
+        (p013 - p026).abs() < 0.03 * p026,
+        "J4D first peak {p026} N at 0.026 m, {p013} N at 0.013 m"
+    );
+    assert!((p026 - J4D_PEAK).abs() < 0.1 * J4D_PEAK, "J4D {p026} N");
 }

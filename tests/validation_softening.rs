@@ -26,8 +26,9 @@ const GF2: f64 = 125.0;
 const KN: f64 = 82e9; // N/m³
 const BAND: f64 = 0.01;
 
-fn scene(mesh_size: Option<f64>, load: f64, push: &str, steps: usize) -> String {
-    let ms = mesh_size.map_or(String::new(), |m| format!("mesh_size = {m}\n"));
+/// The model, the brick and the Eindhoven mortar joint (TOML), the joint taking the
+/// extra lines `joint_keys`.
+fn model_and_mortar(joint_keys: &str) -> String {
     format!(
         r#"
 [model]
@@ -50,6 +51,18 @@ tensile_strength = {FT}
 softening = "exponential"
 fracture_energy_i = {GF1}
 fracture_energy_ii = {GF2}
+{joint_keys}"#,
+        en = KN * BAND,
+        es = 36e9 * BAND,
+        phi = TAN_PHI.atan().to_degrees(),
+    )
+}
+
+fn scene(mesh_size: Option<f64>, load: f64, push: &str, steps: usize) -> String {
+    let ms = mesh_size.map_or(String::new(), |m| format!("mesh_size = {m}\n"));
+    model_and_mortar("")
+        + &format!(
+            r#"
 [[block]]
 name = "base"
 material = "brick"
@@ -70,11 +83,8 @@ type = "static"
 load_steps = {steps}
 push_block = "top"
 push_displacement = {push}
-"#,
-        en = KN * BAND,
-        es = 36e9 * BAND,
-        phi = TAN_PHI.atan().to_degrees(),
-    )
+"#
+        )
 }
 
 /// The push curve: (ux, uy, Fx, Fy) per converged increment (m, N).
@@ -204,5 +214,159 @@ fn sheared_joint_softens_to_friction_and_dissipates_gf2() {
     assert!(
         (w - g).abs() < 0.01 * g,
         "work beyond friction {w} J against {g} J"
+    );
+}
+
+/// (c) Snap-back: a rigid block `a` on the fixed base, joined by the softening joint (area
+///     A = 0.2 × 0.1 m², kₙ = 82 N/mm³), and a rigid block `b` on `a`, joined by a soft
+///     elastic band (k₂ = 10⁷ Pa / 0.01 m × A = 2·10⁷ N/m; strengths 10⁹ Pa, never
+///     reached); `a` is kept from rotating by two fixed guides with frictionless, cohesionless
+///     contacts (no vertical force), so the two contacts of the softening joint open
+///     alike. `b` is pulled up with its rotation and horizontal motion held. Past the peak
+///     F = fₜ A = 5 kN the joint's compliance falls as its softening compliance
+///     G_f^I/(fₜ F) grows; the pull's displacement
+///
+///         u(F) = F (1/(kₙ A) + 1/k₂) + (G_f^I/fₜ) ln(fₜ A / F)        (after the peak)
+///
+///     is smallest at F = G_f^I k₂' / fₜ ≈ 1.44 kN (k₂' the series stiffness), 0.162 mm,
+///     after 0.253 mm at the peak: the path snaps back. Arc length
+///     (`path = "arc_length"`) follows it; every converged point lies on u(F), and the
+///     displacement falls by a third after the peak. Displacement control jumps from the
+///     peak to the far branch: no point of it lies on the falling part.
+fn snap_back_scene(arc: bool) -> String {
+    let path = if arc { "path = \"arc_length\"" } else { "" };
+    model_and_mortar("blocks = [\"base\"]\n")
+        + &format!(
+            r#"
+[[joint]]
+name = "guide"
+normal_modulus = {en}
+shear_modulus = 1.0
+band = {BAND}
+friction_angle = 0.0
+blocks = ["left", "right"]
+[[joint]]
+name = "spring"
+normal_modulus = {SPRING_MODULUS}
+shear_modulus = {SPRING_MODULUS}
+band = {BAND}
+friction_angle = 30.0
+cohesion = 1e9
+tensile_strength = 1e9
+[[block]]
+name = "base"
+material = "brick"
+support = "fixed"
+vertices = [[0.0, -0.1], [{L}, -0.1], [{L}, 0.0], [0.0, 0.0]]
+[[block]]
+name = "left"
+material = "brick"
+support = "fixed"
+vertices = [[-0.1, 0.0], [0.0, 0.0], [0.0, 0.1], [-0.1, 0.1]]
+[[block]]
+name = "right"
+material = "brick"
+support = "fixed"
+vertices = [[{L}, 0.0], [0.3, 0.0], [0.3, 0.1], [{L}, 0.1]]
+[[block]]
+name = "a"
+material = "brick"
+kind = "rigid"
+vertices = [[0.0, 0.0], [{L}, 0.0], [{L}, 0.1], [0.0, 0.1]]
+[[block]]
+name = "b"
+material = "brick"
+kind = "rigid"
+vertices = [[0.0, 0.1], [{L}, 0.1], [{L}, 0.2], [0.0, 0.2]]
+[contacts]
+joint = "spring"
+[analysis]
+type = "static"
+load_steps = 200
+push_block = "b"
+push_displacement = [0.0, 1e-3]
+{path}
+"#,
+            en = KN * BAND,
+        )
+}
+
+/// Eₙ of the soft band in series with the softening joint (Pa): k₂ = Eₙ A / h.
+const SPRING_MODULUS: f64 = 1.0e7;
+
+/// The closed form of (c): the pull's displacement (m) at the force `f` (N), before or
+/// after the peak.
+fn snap_back_displacement(f: f64, after_peak: bool) -> f64 {
+    let k2 = SPRING_MODULUS * AREA / BAND;
+    let elastic = f * (1.0 / (KN * AREA) + 1.0 / k2);
+    if after_peak {
+        elastic + GF1 / FT * (FT * AREA / f).ln()
+    } else {
+        elastic
+    }
+}
+
+#[test]
+fn arc_length_follows_the_snap_back_of_a_softening_joint() {
+    let sc = common::scene(&snap_back_scene(true));
+    let (_, out) = common::solve(&sc);
+    assert_eq!(out.status, Status::Stable, "{:?}", out.status);
+    let pts = curve(&out);
+    let peak = (0..pts.len())
+        .max_by(|&i, &j| pts[i][3].total_cmp(&pts[j][3]))
+        .unwrap();
+    let (u_peak, f_peak) = (pts[peak][1], pts[peak][3]);
+    // the peak fₜ A = 5 kN is met within an increment (Δu ≈ 5 µm on the elastic branch:
+    // kₛₑᵣᵢₑₛ Δu ≈ 100 N, 2 %)
+    assert!(
+        (f_peak - FT * AREA).abs() < 0.02 * FT * AREA,
+        "peak {f_peak} N"
+    );
+    // every converged point on the closed form: the increments converge to 10⁻⁶ of the
+    // load, which moves u by at most 10⁻⁶ × 5 kN × the softening compliance
+    // G_f^I/(fₜ F) ≤ 7·10⁻⁵/F m/N: < 10⁻⁶ relative at the smallest forces of the path
+    let mut worst: f64 = 0.0;
+    for (i, p) in pts.iter().enumerate().skip(1) {
+        let u = snap_back_displacement(p[3], i > peak);
+        worst = worst.max((p[1] - u).abs() / p[1].abs());
+    }
+    eprintln!(
+        "snap-back: {} points, peak {f_peak} N at {u_peak} m, worst relative deviation {worst:.2e}",
+        pts.len()
+    );
+    assert!(worst < 1e-5, "off the closed form by {worst}");
+    // it snaps back: after the peak the displacement falls to the closed form's least
+    // value, then grows to the end of the push
+    let least = pts[peak..]
+        .iter()
+        .map(|p| p[1])
+        .fold(f64::INFINITY, f64::min);
+    let k2s = 1.0 / (1.0 / (KN * AREA) + 1.0 / (SPRING_MODULUS * AREA / BAND));
+    let f_min = GF1 * k2s / FT;
+    let u_min = snap_back_displacement(f_min, true);
+    assert!(
+        (least - u_min).abs() < 0.01 * u_min,
+        "least displacement {least} m against {u_min} m"
+    );
+    assert!(least < 0.7 * u_peak, "{least} {u_peak}");
+    // the path ends with the increment that passes the end of the push (≈ 5 µm)
+    let end = pts.last().unwrap()[1];
+    assert!((1e-3..1.01e-3).contains(&end), "ended at {end} m");
+
+    // displacement control on the same scene: no point on the falling part of the path
+    let sc = common::scene(&snap_back_scene(false));
+    let (_, out) = common::solve(&sc);
+    let pts = curve(&out);
+    let on_snap_back = pts
+        .iter()
+        .filter(|p| p[1] > u_min * 1.01 && p[1] < u_peak * 0.99 && p[3] > f_min * 1.01)
+        .filter(|p| {
+            // a point of the falling part: u above the closed form's rising branch
+            (p[1] - snap_back_displacement(p[3], true)).abs() < 1e-3 * p[1]
+        })
+        .count();
+    assert_eq!(
+        on_snap_back, 0,
+        "displacement control followed the snap-back?"
     );
 }

@@ -27,7 +27,7 @@ use std::path::Path;
 pub const FILE: &str = "checkpoint.bin";
 const MAGIC: &[u8; 8] = b"DFEMCKPT";
 /// Version of the format; a file of another version is refused.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 
 /// The state of a dynamic run after `step` completed time steps.
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -20,10 +20,11 @@ pub struct Committed {
     /// Total unknowns since the start (m, rad): rigid blocks' centroid displacement and
     /// rotation, deformable nodes' displacement.
     pub u: Vec<f64>,
-    /// History variable of each contact's law ([`crate::material::ContactLaw::update_history`]; the spent
-    /// fraction ξ of the fracture energy of a softening joint, 0 for a new contact). A
-    /// contact past the end of this list (one a driver added without it) has 0.
-    pub history: Vec<f64>,
+    /// History variables of each contact's law ([`crate::material::History`]: the spent
+    /// fraction ξ of the fracture energy of a softening joint and the plastic relative
+    /// displacement on its compression cap, zero for a new contact). A contact past the
+    /// end of this list (one a driver added without it) has zero.
+    pub history: Vec<crate::material::History>,
 }
 
 impl Committed {
@@ -33,7 +34,7 @@ impl Committed {
             force: vec![[0.0; 2]; mesh.contacts.len()],
             state: vec![ContactState::Stick; mesh.contacts.len()],
             u: vec![0.0; mesh.n_dofs],
-            history: vec![0.0; mesh.contacts.len()],
+            history: vec![[0.0; 2]; mesh.contacts.len()],
         }
     }
 }
@@ -52,8 +53,8 @@ pub struct Trial {
     /// Per contact: the increment of relative displacement (Δδₙ, Δδₛ) (m) in the
     /// contact's frame at the start of the increment (the energy audit's slip).
     pub rel: Vec<[f64; 2]>,
-    /// Per contact: the history variable after the increment ([`Committed::history`]).
-    pub history: Vec<f64>,
+    /// Per contact: the history variables after the increment ([`Committed::history`]).
+    pub history: Vec<crate::material::History>,
 }
 
 /// The secant local stiffness (N/m) of a contact in a state (METHOD.md §4, step 1): the
@@ -178,7 +179,7 @@ pub fn evaluate(
         .collect();
     // contacts
     let nc = cur.contacts.len();
-    let res: Vec<([f64; 2], ContactState, [f64; 2], f64)> = (0..nc)
+    let res: Vec<([f64; 2], ContactState, [f64; 2], crate::material::History)> = (0..nc)
         .into_par_iter()
         .with_min_len(256)
         .map(|k| {
@@ -189,7 +190,7 @@ pub fn evaluate(
                 n0[0] * rel[0] + n0[1] * rel[1],
                 -n0[1] * rel[0] + n0[0] * rel[1],
             ];
-            let h = committed.history.get(k).copied().unwrap_or(0.0);
+            let h = committed.history.get(k).copied().unwrap_or([0.0; 2]);
             let (f, st, h) = law.law(k).update_history(area[k], committed.force[k], h, d);
             (f, st, d, h)
         })
@@ -197,7 +198,7 @@ pub fn evaluate(
     let rel: Vec<[f64; 2]> = res.iter().map(|r| r.2).collect();
     let force: Vec<[f64; 2]> = res.iter().map(|r| r.0).collect();
     let state: Vec<ContactState> = res.iter().map(|r| r.1).collect();
-    let history: Vec<f64> = res.iter().map(|r| r.3).collect();
+    let history: Vec<crate::material::History> = res.iter().map(|r| r.3).collect();
     // internal force vector, serial in element order (deterministic)
     let mut f_int = vec![0.0; n];
     for (t, tri) in mesh.triangles.iter().enumerate() {

@@ -169,6 +169,14 @@ pub fn run_with(
             .place(format!("joint '{}' key 'blocks'", joint.name))
             .fix("remove the key 'blocks' for a dynamic run, or run a static or capacity analysis"));
         }
+        if let Some(joint) = scene.joints.iter().find(|j| j.within_unit) {
+            return Err(Error::new(format!(
+                "joint '{}' is given to the potential cracks of split bricks, and the dynamic analysis gives every contact the [contacts] joint",
+                joint.name
+            ))
+            .place(format!("joint '{}' key 'within'", joint.name))
+            .fix("remove the key 'within' for a dynamic run, or run a static or capacity analysis"));
+        }
         let j = scene.contacts.joint;
         if let Some(joint) = scene.joints.get(j) {
             if joint.softening != crate::scene::JointSoftening::None {

@@ -20,6 +20,9 @@ use crate::{Error, Result};
 use dfem_kernels::CsrMatrix;
 use std::time::Instant;
 
+#[path = "arc_length.rs"]
+pub mod arc_length;
+
 /// The iteration strategy (`[analysis] strategy`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Strategy {
@@ -59,6 +62,8 @@ pub struct Settings {
     pub line_search: bool,
     /// Displacement control (`push_block`, `push_displacement`), if any.
     pub push: Option<Push>,
+    /// Arc-length path following of the push (`path = "arc_length"`), if any.
+    pub arc: Option<arc_length::ArcLength>,
 }
 
 /// Displacement control of a static analysis: after gravity and the loads, the rigid
@@ -158,7 +163,7 @@ impl Settings {
         } else {
             300.0
         };
-        Ok(Settings {
+        Settings {
             strategy,
             tolerance: num("tolerance", 1e-6, 1e-14, 0.1)?,
             max_iterations: num("max_iterations", default_iters, 1.0, 1e6)? as usize,
@@ -170,7 +175,14 @@ impl Settings {
                 .and_then(|v| v.as_bool())
                 .unwrap_or(strategy != Strategy::Initial),
             push: Push::from_scene(scene)?,
-        })
+            arc: None,
+        }
+        .with_arc(scene)
+    }
+
+    fn with_arc(mut self, scene: &Scene) -> Result<Settings> {
+        self.arc = arc_length::ArcLength::from_scene(scene, self.push.as_ref())?;
+        Ok(self)
     }
 }
 
@@ -189,6 +201,8 @@ pub const KEYS: &[&str] = &[
     "push_block",
     "push_displacement",
     "gravity_steps",
+    "path",
+    "arc_length",
 ];
 
 /// The loads of one phase as functions of its load factor.
@@ -235,6 +249,9 @@ pub struct Driver<'a> {
     pins: Vec<(usize, f64)>,
     /// The curve of the displacement-controlled phase so far.
     push_curve: Vec<super::curve::CurvePoint>,
+    /// Per contact: its changes of state in the iterations of the current arc-length
+    /// increment (`arc_length`; empty under displacement control).
+    flips: Vec<u32>,
 }
 
 /// What the progress report needs between calls.
@@ -345,6 +362,7 @@ impl<'a> Driver<'a> {
             report: Report::default(),
             pins: Vec::new(),
             push_curve: Vec::new(),
+            flips: Vec::new(),
         })
     }
 
@@ -366,6 +384,16 @@ impl<'a> Driver<'a> {
             .map(|k| {
                 let law = self.law.get(k);
                 let s = law.springs(self.area[k]);
+                if self
+                    .flips
+                    .get(k)
+                    .is_some_and(|&n| n >= arc_length::FLIP_LIMIT)
+                {
+                    // a contact that keeps changing state at the kink of its law keeps its
+                    // elastic springs: they bound every tangent of the law, so the
+                    // iterations contract to the state at the kink instead of cycling
+                    return [[s.kn, 0.0], [0.0, s.ks]];
+                }
                 match trial.state[k] {
                     ContactState::Stick => [[s.kn, 0.0], [0.0, s.ks]],
                     ContactState::Open => [[0.0, 0.0], [0.0, 0.0]],
@@ -1151,7 +1179,10 @@ pub fn run_with_progress<'a>(
             record: Some(push.block),
         };
         d.begin_phase("push", Some(steps), 1.0);
-        let (s, why) = d.run_phase(&phase, steps)?;
+        let (s, why) = match d.settings.arc {
+            Some(arc) => arc_length::run(&mut d, &phase.base, &push, &arc, steps)?,
+            None => d.run_phase(&phase, steps)?,
+        };
         let curve = super::curve::Curve {
             control_block: push.block,
             points: std::mem::take(&mut d.push_curve),

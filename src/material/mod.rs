@@ -1,6 +1,7 @@
 //! Constitutive laws: the blocks' elastic matrix (METHOD.md section 2) and the contact
 //! band (METHOD.md section 3) behind the [`ContactLaw`] trait.
 
+pub mod cap;
 pub mod mohr_coulomb;
 pub mod softening;
 
@@ -80,6 +81,11 @@ pub struct ContactSprings {
     pub ks: f64,
 }
 
+/// The history variables of a contact's law: the spent fraction ξ of the fracture
+/// energy of a softening joint (dimensionless) and the plastic relative displacement κ₃
+/// on its compression cap (m); zero for a new contact.
+pub type History = [f64; 2];
+
 /// A contact law maps an increment of relative displacement of a contact (normal Δδₙ,
 /// shear Δδₛ, m) from the forces committed at the start of the increment (Fₙ₀, Fₛ₀, N) to
 /// the new forces (N) and state. The elastic band is the linear law; tension cut-off,
@@ -90,15 +96,15 @@ pub trait ContactLaw: Sync + Send {
     /// Forces (normal, shear; N) and state after the increment `d` = (Δδₙ, Δδₛ) (m).
     fn update(&self, area: f64, committed: [f64; 2], d: [f64; 2]) -> ([f64; 2], ContactState);
     /// [`ContactLaw::update`] for a law with history: `history` is the contact's committed
-    /// history variable (dimensionless; 0 for a new contact), returned updated. Laws
-    /// without history keep it unchanged.
+    /// [`History`] (zero for a new contact), returned updated. Laws without history keep
+    /// it unchanged.
     fn update_history(
         &self,
         area: f64,
         committed: [f64; 2],
-        history: f64,
+        history: History,
         d: [f64; 2],
-    ) -> ([f64; 2], ContactState, f64) {
+    ) -> ([f64; 2], ContactState, History) {
         let (f, s) = self.update(area, committed, d);
         (f, s, history)
     }
@@ -183,9 +189,9 @@ impl ContactLaw for JointLaw {
         &self,
         area: f64,
         committed: [f64; 2],
-        history: f64,
+        history: History,
         d: [f64; 2],
-    ) -> ([f64; 2], ContactState, f64) {
+    ) -> ([f64; 2], ContactState, History) {
         match self {
             JointLaw::MohrCoulomb(m) => m.update_history(area, committed, history, d),
             JointLaw::Softening(m) => m.update_history(area, committed, history, d),

@@ -1,7 +1,8 @@
-//! The softening joint (METHOD.md §3; docs/theory.md, "Softening joints"): tension
-//! cut-off and Mohr–Coulomb strength whose tensile strength and cohesion soften
-//! exponentially with the fracture energies G_f^I and G_f^II, friction remaining, after
-//! the interface model of Lourenço and Rots (1997) without its compression cap.
+//! The softening joint (METHOD.md §3; docs/theory.md, "Softening joints" and
+//! "Compression cap"): tension cut-off and Mohr–Coulomb strength whose tensile strength
+//! and cohesion soften exponentially with the fracture energies G_f^I and G_f^II,
+//! friction remaining, and optionally the elliptic compression cap of [`super::cap`],
+//! after the composite interface model of Lourenço and Rots (1997).
 //!
 //! Stresses per unit contact area (Pa), compression negative; relative displacements
 //! (m). With the elastic trial stresses σ* = σ₀ + kₙ Δδₙ, τ* = τ₀ + kₛ Δδₛ (kₙ = Eₙ/h,
@@ -14,16 +15,20 @@
 //!   linear mixed-mode energy criterion). Within an increment s′ = s exp(−fₜ Δλ₁/G_f^I −
 //!   c Δλ₂/G_f^II), exact along a radial plastic path. Under pure tension this is
 //!   σ = fₜ exp(−fₜ u_p/G_f^I) with ∫σ du_p = G_f^I; under shear at constant σ,
-//!   τ = c exp(−c u_p/G_f^II) − σ tan φ with ∫(τ + σ tan φ) du_p = G_f^II.
+//!   τ = c exp(−c u_p/G_f^II) − σ tan φ with ∫(τ + σ tan φ) du_p = G_f^II;
+//! * cap surface f₃ = σ² + C_ss τ² − σ̄(κ₃)², associated flow, its own history κ₃ (m),
+//!   uncoupled from ξ (Lourenço and Rots 1997 couple tension and shear only).
 //!
 //! Everything is per unit area and per unit relative displacement, so the dissipated
 //! energy of a joint is G_f × its area whatever the number of contacts it is split
 //! into: the regularisation that keeps the response independent of the mesh.
 
-use super::{ContactLaw, ContactSprings, ContactState, ElasticBand};
+use super::cap::{bisect, decreasing_root, Cap};
+use super::{ContactLaw, ContactSprings, ContactState, ElasticBand, History};
 use crate::scene::Joint;
 
-/// Mode-I and mode-II exponential softening of a Mohr–Coulomb band with tension cut-off.
+/// Mode-I and mode-II exponential softening of a Mohr–Coulomb band with tension cut-off,
+/// and an optional compression cap.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Softening {
     pub elastic: ElasticBand,
@@ -37,9 +42,11 @@ pub struct Softening {
     pub fracture_energy_i: f64,
     /// Mode-II fracture energy G_f^II (N/m), > 0.
     pub fracture_energy_ii: f64,
+    /// The compression cap, if any.
+    pub cap: Option<Cap>,
 }
 
-/// Which surfaces are active in a return.
+/// Which surfaces of tension and shear are active in a return.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Active {
     Tension,
@@ -50,6 +57,16 @@ enum Active {
 /// Bisection steps of the scalar return equation: the bracket [0, s] shrinks to 2⁻⁶⁰ s.
 const BISECTIONS: usize = 60;
 
+/// The result of a return: stresses (Pa), remaining fraction s′ and the cap's history κ₃
+/// (m).
+#[derive(Debug, Clone, Copy)]
+struct Returned {
+    sig: f64,
+    tau: f64,
+    s: f64,
+    kappa: f64,
+}
+
 impl Softening {
     pub fn from_joint(j: &Joint) -> Self {
         Softening {
@@ -59,19 +76,32 @@ impl Softening {
             tensile_strength: j.tensile_strength,
             fracture_energy_i: j.fracture_energy_i,
             fracture_energy_ii: j.fracture_energy_ii,
+            cap: j.cap.map(|c| {
+                Cap::new(
+                    c.compressive_strength,
+                    c.shear_factor,
+                    c.fracture_energy.map(|g| (g, c.peak_displacement)),
+                )
+            }),
         }
     }
 
-    /// The return of the trial stresses (σ*, |τ*|) (Pa) with the active set `active` from
-    /// the remaining fraction `s`: (σ, |τ|, s′, Δλ₁, Δλ₂). The unknown is s′ ∈ [0, s]:
-    /// the plastic multipliers follow from it linearly (the stresses on the active
-    /// surfaces at strength s′), and s′ = s exp(−a Δλ₁ − b Δλ₂) is solved by bisection
-    /// (its left side minus right side increases from −s·e^… < 0 at s′ = 0 to ≥ 0 at s′ = s).
-    fn ret(&self, sig: f64, tau: f64, s: f64, active: Active) -> (f64, f64, f64, f64, f64) {
-        let (kn, ks) = (
+    /// kₙ = Eₙ/h and kₛ = Gₛ/h (N/m³).
+    fn stiffness(&self) -> (f64, f64) {
+        (
             self.elastic.normal_modulus / self.elastic.band,
             self.elastic.shear_modulus / self.elastic.band,
-        );
+        )
+    }
+
+    /// The return of the trial stresses (σ*, |τ*|) (Pa) onto the tension and shear
+    /// surfaces `active` from the remaining fraction `s`, with the stiffnesses (kₙ, kₛ)
+    /// (N/m³): (σ, |τ|, s′). The unknown is s′ ∈ [0, s]: the plastic multipliers follow
+    /// from it linearly (the stresses on the active surfaces at strength s′), and
+    /// s′ = s exp(−a Δλ₁ − b Δλ₂) is solved by bisection (its left side minus right side
+    /// increases from −s·e^… < 0 at s′ = 0 to ≥ 0 at s′ = s).
+    fn ret(&self, sig: f64, tau: f64, s: f64, k: (f64, f64), active: Active) -> (f64, f64, f64) {
+        let (kn, ks) = k;
         let (ft, c, tp) = (self.tensile_strength, self.cohesion, self.tan_phi);
         let a = ft / self.fracture_energy_i;
         let b = c / self.fracture_energy_ii;
@@ -97,51 +127,149 @@ impl Softening {
             let (_, _, l1, l2) = at(r);
             r - s * (-a * l1.max(0.0) - b * l2.max(0.0)).exp()
         };
-        let (mut lo, mut hi) = (0.0, s);
-        if s > 0.0 && resid(hi) > 0.0 {
-            for _ in 0..BISECTIONS {
-                let mid = 0.5 * (lo + hi);
-                if resid(mid) > 0.0 {
-                    hi = mid;
-                } else {
-                    lo = mid;
-                }
-            }
-        }
-        let r = 0.5 * (lo + hi);
-        let (s1, t, l1, l2) = at(r);
-        (s1, t, r, l1, l2)
+        let r = if s > 0.0 && resid(s) > 0.0 {
+            bisect(0.0, s, BISECTIONS, |r| resid(r) > 0.0)
+        } else {
+            s
+        };
+        let (s1, t, _, _) = at(r);
+        (s1, t, r)
+    }
+
+    /// The return onto the cap alone from (σ*, |τ*|) with history κ₀: σ = σ*/(1 + 2Δλ kₙ),
+    /// τ = τ*/(1 + 2Δλ kₛ C_ss) (associated flow), Δλ such that the point is on the cap
+    /// of the new κ₃ = κ₀ + Δλ |(2σ, 2C_ss τ)| (theory.md, Eq. C4).
+    fn ret_cap(&self, cap: &Cap, sig: f64, tau: f64, s: f64, kappa: f64) -> Option<Returned> {
+        let (kn, ks) = self.stiffness();
+        let css = cap.shear_factor;
+        let at = |t: f64| {
+            // t = 2 Δλ kₙ (dimensionless)
+            let lam = t / (2.0 * kn);
+            let sg = sig / (1.0 + t);
+            let ta = tau / (1.0 + 2.0 * lam * ks * css);
+            let k = kappa + cap.plastic_length(lam, sg, ta);
+            (sg, ta, k)
+        };
+        let t = decreasing_root(
+            |t| {
+                let (sg, ta, k) = at(t);
+                cap.radius(sg, ta) - cap.yield_value(k)
+            },
+            1e-9,
+        )?;
+        let (sg, ta, k) = at(t);
+        Some(Returned {
+            sig: sg,
+            tau: ta,
+            s,
+            kappa: k,
+        })
+    }
+
+    /// The return onto the corner of the cap and the shear surface: for a cap multiplier
+    /// Δλ₃ the normal stress is σ*/(1 + 2Δλ₃ kₙ) and the shear return runs with the trial
+    /// |τ*|/(1 + 2Δλ₃ kₛ C_ss) and the stiffness kₛ/(1 + 2Δλ₃ kₛ C_ss); Δλ₃ puts the result
+    /// on the cap (theory.md, Eq. C5).
+    fn ret_corner(&self, cap: &Cap, sig: f64, tau: f64, s: f64, kappa: f64) -> Option<Returned> {
+        let (kn, ks) = self.stiffness();
+        let css = cap.shear_factor;
+        let at = |t: f64| {
+            let lam = t / (2.0 * kn);
+            let d = 1.0 + 2.0 * lam * ks * css;
+            let sg = sig / (1.0 + t);
+            let (_, ta, r) = self.ret(sg, tau / d, s, (kn, ks / d), Active::Shear);
+            let k = kappa + cap.plastic_length(lam, sg, ta);
+            (sg, ta, r, k)
+        };
+        let t = decreasing_root(
+            |t| {
+                let (sg, ta, _, k) = at(t);
+                cap.radius(sg, ta) - cap.yield_value(k)
+            },
+            1e-9,
+        )?;
+        let (sg, ta, r, k) = at(t);
+        Some(Returned {
+            sig: sg,
+            tau: ta,
+            s: r,
+            kappa: k,
+        })
     }
 
     /// The return mapping of one contact, per unit area: trial stresses (σ*, τ*) (Pa)
-    /// and history ξ → stresses (Pa), state and new history.
-    pub fn stress_update(&self, sig: f64, tau: f64, xi: f64) -> ([f64; 2], ContactState, f64) {
+    /// and history (ξ, κ₃) → stresses (Pa), state and new history. The state is open
+    /// when the tension surface is active, slip when the shear surface is (alone or at the
+    /// corner with the cap), stick otherwise (on the cap alone the contact crushes with its
+    /// elastic springs in the secant matrix).
+    pub fn stress_update(
+        &self,
+        sig: f64,
+        tau: f64,
+        h: History,
+    ) -> ([f64; 2], ContactState, History) {
+        let [xi, kappa] = h;
         let s = (1.0 - xi).clamp(0.0, 1.0);
         let (ft, c, tp) = (self.tensile_strength, self.cohesion, self.tan_phi);
+        let cap_scale = self.cap.map_or(0.0, |c| c.strength);
         // relative tolerance of the yield checks: round-off of the stresses
-        let tol = 1e-12 * (ft + c + sig.abs() + tau.abs());
-        let f1 = sig - s * ft;
-        let f2 = tau.abs() + sig * tp - s * c;
-        if f1 <= tol && f2 <= tol {
-            return ([sig, tau], ContactState::Stick, xi);
-        }
-        let ta = tau.abs();
-        let done = |(s1, t, r, _, _): (f64, f64, f64, f64, f64), st| {
-            ([s1, t.copysign(tau)], st, (1.0 - r).clamp(xi, 1.0))
+        let tol = 1e-12 * (ft + c + cap_scale + sig.abs() + tau.abs());
+        let f1 = |sg: f64, r: f64| sg - r * ft;
+        let f2 = |sg: f64, ta: f64, r: f64| ta + sg * tp - r * c;
+        let f3 = |sg: f64, ta: f64, k: f64| {
+            self.cap.map_or(f64::NEG_INFINITY, |cp| {
+                cp.radius(sg, ta) - cp.yield_value(k)
+            })
         };
-        if f2 > tol {
-            let out = self.ret(sig, ta, s, Active::Shear);
-            if out.0 - out.2 * ft <= tol {
+        let ta = tau.abs();
+        if f1(sig, s) <= tol && f2(sig, ta, s) <= tol && f3(sig, ta, kappa) <= tol {
+            return ([sig, tau], ContactState::Stick, h);
+        }
+        let done = |r: Returned, st| {
+            (
+                [r.sig, r.tau.copysign(tau)],
+                st,
+                [(1.0 - r.s).clamp(xi, 1.0), r.kappa.max(kappa)],
+            )
+        };
+        let tension_shear = |active| {
+            let (sg, t, r) = self.ret(sig, ta, s, self.stiffness(), active);
+            Returned {
+                sig: sg,
+                tau: t,
+                s: r,
+                kappa,
+            }
+        };
+        if f2(sig, ta, s) > tol {
+            let out = tension_shear(Active::Shear);
+            if f1(out.sig, out.s) <= tol && f3(out.sig, out.tau, kappa) <= tol {
                 return done(out, ContactState::Slip);
             }
         }
-        if f1 > tol {
-            let out = self.ret(sig, ta, s, Active::Tension);
-            if out.1 + out.0 * tp - out.2 * c <= tol {
+        if f1(sig, s) > tol {
+            let out = tension_shear(Active::Tension);
+            if f2(out.sig, out.tau, out.s) <= tol {
+                return done(out, ContactState::Open);
+            }
+            let out = tension_shear(Active::Both);
+            if out.sig > 0.0 || self.cap.is_none() {
                 return done(out, ContactState::Open);
             }
         }
-        done(self.ret(sig, ta, s, Active::Both), ContactState::Open)
+        if let Some(cap) = &self.cap {
+            if sig < 0.0 {
+                if let Some(out) = self.ret_cap(cap, sig, ta, s, kappa) {
+                    if f2(out.sig, out.tau, out.s) <= tol {
+                        return done(out, ContactState::Stick);
+                    }
+                }
+                if let Some(out) = self.ret_corner(cap, sig, ta, s, kappa) {
+                    return done(out, ContactState::Slip);
+                }
+            }
+        }
+        done(tension_shear(Active::Both), ContactState::Open)
     }
 }
 
@@ -151,7 +279,7 @@ impl ContactLaw for Softening {
     }
 
     fn update(&self, area: f64, committed: [f64; 2], d: [f64; 2]) -> ([f64; 2], ContactState) {
-        let (f, st, _) = self.update_history(area, committed, 0.0, d);
+        let (f, st, _) = self.update_history(area, committed, [0.0; 2], d);
         (f, st)
     }
 
@@ -159,14 +287,14 @@ impl ContactLaw for Softening {
         &self,
         area: f64,
         committed: [f64; 2],
-        history: f64,
+        history: History,
         d: [f64; 2],
-    ) -> ([f64; 2], ContactState, f64) {
+    ) -> ([f64; 2], ContactState, History) {
         let k = self.springs(area);
         let sig = (committed[0] + k.kn * d[0]) / area;
         let tau = (committed[1] + k.ks * d[1]) / area;
-        let (s, st, xi) = self.stress_update(sig, tau, history);
-        ([s[0] * area, s[1] * area], st, xi)
+        let (s, st, h) = self.stress_update(sig, tau, history);
+        ([s[0] * area, s[1] * area], st, h)
     }
 }
 
@@ -189,7 +317,149 @@ mod tests {
             tensile_strength: 0.25e6,
             fracture_energy_i: 18.0,
             fracture_energy_ii: 125.0,
+            cap: None,
         }
+    }
+
+    /// [`eindhoven`] with the cap of Lourenço and Rots (1997) as BENCHMARKS.md V8 gives
+    /// it (fₘ = 10.5 N/mm², C_ss = 9) and the hardening/softening data of the example
+    /// (`energy`: G_fc (N/m) and κₚ (m); `None`: perfectly plastic).
+    fn with_cap(energy: Option<(f64, f64)>) -> Softening {
+        Softening {
+            cap: Some(Cap::new(10.5e6, 9.0, energy)),
+            ..eindhoven()
+        }
+    }
+
+    /// Uniaxial compression of a unit contact in steps of 0.1 µm to 3 mm: once on the
+    /// cap, σ = −σ̄(κ₃) with κ₃ the plastic closure (the total closure less the elastic
+    /// part σ/kₙ), and the work beyond the peak above the residual strength is G_fc.
+    #[test]
+    fn compression_follows_the_cap_law_and_dissipates_gfc() {
+        let m = with_cap(Some((5000.0, 0.093e-3)));
+        let cap = m.cap.unwrap();
+        let kn = 82e9;
+        let (mut f, mut h) = ([0.0, 0.0], [0.0; 2]);
+        let (mut up, mut work, mut on_cap) = (0.0f64, 0.0, 0);
+        let du = -1e-7;
+        let (kp, _) = cap.softening.unwrap();
+        for _ in 0..30_000 {
+            let (g, st, h2) = m.update_history(1.0, f, h, [du, 0.0]);
+            assert_eq!(st, ContactState::Stick);
+            assert_eq!(g[1], 0.0);
+            let dup = du - (g[0] - f[0]) / kn;
+            if up.abs() >= kp {
+                work += (-0.5 * (g[0] + f[0]) - 10.5e6 / 7.0) * -dup;
+            }
+            up += dup;
+            if h2[1] > 0.0 {
+                on_cap += 1;
+                // the return's κ₃ is the plastic closure (to the bisection's 2⁻⁸⁰ and
+                // the round-off of the sum of 30 000 steps) and σ = −σ̄(κ₃)
+                assert!(
+                    (h2[1] + up).abs() < 1e-9 * (1.0 + up.abs()) + 1e-15,
+                    "{h2:?} {up}"
+                );
+                let expected = -cap.yield_value(-up);
+                assert!(
+                    (g[0] - expected).abs() < 1e-6 * 10.5e6,
+                    "{} {}",
+                    g[0],
+                    expected
+                );
+            }
+            assert_eq!(
+                h2[0], 0.0,
+                "compression spends no fracture energy of the joint"
+            );
+            f = g;
+            h = h2;
+        }
+        assert!(on_cap > 25_000);
+        // trapezoid rule with 0.1 µm on a softening length κₘ − κₚ = 0.58 mm, from κₚ
+        // (the first step past it is counted whole: ≤ 0.1 µm × fₘ = 1 N/m); the tail
+        // beyond 3 mm is exp(−2·2.9/0.58 · 0.5/0.36…) ≈ 1e-6 of G_fc
+        assert!((work - 5000.0).abs() < 2e-3 * 5000.0, "work {work}");
+    }
+
+    /// A trial point outside the perfectly plastic cap returns onto the ellipse
+    /// σ² + C_ss τ² = fₘ² along the associated flow: the plastic relative displacement
+    /// (Δδ − ΔF/k) is parallel to (σ, C_ss τ). Checked against an independent Newton
+    /// solution of the same return in the multiplier.
+    #[test]
+    fn cap_return_is_normal_to_the_ellipse() {
+        let m = with_cap(None);
+        let (kn, ks, css, fc) = (82e9, 36e9, 9.0, 10.5e6);
+        // from σ₀ = −9 MPa, τ₀ = 3 MPa (inside the Coulomb cone: 3 < 0.35 + 6.75), a step
+        // further in compression and shear
+        let (s0, t0) = (-9.0e6, 3.0e6);
+        let d = [-4e-5, 2e-5];
+        let (g, st, h) = m.update_history(1.0, [s0, t0], [0.0; 2], d);
+        assert_eq!(st, ContactState::Stick);
+        let (sig, tau) = (g[0], g[1]);
+        assert!((sig * sig + css * tau * tau).sqrt() - fc < 1e-9 * fc);
+        let dup = [d[0] - (sig - s0) / kn, d[1] - (tau - t0) / ks];
+        let cross = dup[0] * css * tau - dup[1] * sig;
+        assert!(cross.abs() < 1e-9 * dup[0].hypot(dup[1]) * fc, "not normal");
+        assert!((h[1] - dup[0].hypot(dup[1])).abs() < 1e-12, "κ₃ {h:?}");
+        // independent: Newton on x = 2Δλ in σ = σ*/(1 + x kₙ), τ = τ*/(1 + x kₛ C_ss)
+        let (ss, ts) = (s0 + kn * d[0], t0 + ks * d[1]);
+        let mut x = 0.0;
+        for _ in 0..50 {
+            let (a, b) = (1.0 + x * kn, 1.0 + x * ks * css);
+            let r = ss * ss / (a * a) + css * ts * ts / (b * b) - fc * fc;
+            let dr =
+                -2.0 * ss * ss * kn / (a * a * a) - 2.0 * css * ts * ts * ks * css / (b * b * b);
+            x -= r / dr;
+        }
+        assert!((sig - ss / (1.0 + x * kn)).abs() < 1e-6, "{sig}");
+        assert!((tau - ts / (1.0 + x * ks * css)).abs() < 1e-6, "{tau}");
+    }
+
+    /// With the cohesion spent (ξ = 1) and a perfectly plastic cap, the corner of the cap
+    /// and the friction line is σ_c = −fₘ/√(1 + C_ss tan²φ), τ_c = −σ_c tan φ. A trial
+    /// point built from it by positive multipliers of both flows returns to it.
+    #[test]
+    fn corner_of_cap_and_friction_line() {
+        let m = with_cap(None);
+        let (kn, ks, css, fc, tp): (f64, f64, f64, f64, f64) = (82e9, 36e9, 9.0, 10.5e6, 0.75);
+        let sc = -fc / (1.0 + css * tp * tp).sqrt();
+        let tc = -sc * tp;
+        for (l2, l3) in [(1e-5, 1e-12), (1e-6, 1e-13), (0.0, 1e-12), (1e-5, 0.0)] {
+            let trial = [
+                sc * (1.0 + 2.0 * l3 * kn),
+                tc * (1.0 + 2.0 * l3 * ks * css) + l2 * ks,
+            ];
+            let (g, st, h) = m.stress_update(trial[0], trial[1], [1.0, 0.0]);
+            // on the cap's flow alone the return lands on the corner from the cap's side
+            let expected = if l2 > 0.0 {
+                ContactState::Slip
+            } else {
+                ContactState::Stick
+            };
+            assert_eq!(st, expected, "{l2} {l3}");
+            assert!(
+                (g[0] - sc).abs() < 1e-6 * fc,
+                "{l2} {l3}: σ {} against {sc}",
+                g[0]
+            );
+            assert!(
+                (g[1] - tc).abs() < 1e-6 * fc,
+                "{l2} {l3}: τ {} against {tc}",
+                g[1]
+            );
+            // κ₃ = Δλ₃ |(2σ, 2C_ss τ)|
+            let k = 2.0 * l3 * sc.hypot(css * tc);
+            assert!(
+                (h[1] - k).abs() <= 1e-6 * k + 1e-18,
+                "{l2} {l3}: κ₃ {} against {k}",
+                h[1]
+            );
+        }
+        // the same trial without the cap slips along the friction line beyond fₘ
+        let trial = [sc * (1.0 + 2e-12 * kn), tc + 1e-5 * ks];
+        let (g, _, _) = eindhoven().stress_update(trial[0], trial[1], [1.0, 0.0]);
+        assert!(g[0] < sc * 1.1);
     }
 
     /// Pure tension, one contact of unit area opened in small steps: σ follows
@@ -202,7 +472,7 @@ mod tests {
         let du = 1e-7; // 0.1 µm per step; the crack opens to 1 mm
         let mut opened = false;
         for _ in 0..10_000 {
-            let (g, st, x) = m.update_history(1.0, f, xi, [du, 0.0]);
+            let (g, st, x) = m.update_history(1.0, f, [xi, 0.0], [du, 0.0]);
             // plastic opening of the step: the total minus the elastic change
             let dup = du - (g[0] - f[0]) / kn;
             work += 0.5 * (g[0] + f[0]) * dup;
@@ -219,7 +489,7 @@ mod tests {
                 );
             }
             f = g;
-            xi = x;
+            xi = x[0];
         }
         assert!(opened);
         // the trapezoidal rule of ∫σ du_p with steps of 0.1 µm on a decay length of
@@ -240,11 +510,11 @@ mod tests {
         let (mut xi, mut up, mut work) = (0.0, 0.0, 0.0);
         let du = 1e-6;
         // compress first (elastic), then shear in steps of 1 µm to 8 mm
-        let (g, st, _) = m.update_history(1.0, [0.0, 0.0], 0.0, [sigma / kn, 0.0]);
+        let (g, st, _) = m.update_history(1.0, [0.0, 0.0], [0.0; 2], [sigma / kn, 0.0]);
         assert_eq!(st, ContactState::Stick);
         assert!((g[0] - sigma).abs() < 1e-6);
         for _ in 0..8000 {
-            let (g, st, x) = m.update_history(1.0, f, xi, [0.0, du]);
+            let (g, st, x) = m.update_history(1.0, f, [xi, 0.0], [0.0, du]);
             assert!((g[0] - sigma).abs() < 1e-6, "the normal stress stays");
             let dup = du - (g[1] - f[1]) / ks;
             work += (0.5 * (g[1] + f[1]) + sigma * 0.75) * dup;
@@ -259,7 +529,7 @@ mod tests {
                 );
             }
             f = g;
-            xi = x;
+            xi = x[0];
         }
         assert!(
             (f[1] + sigma * 0.75).abs() < 1e-3 * 0.35e6,
@@ -280,7 +550,7 @@ mod tests {
         let (mut w1, mut w2) = (0.0, 0.0);
         for _ in 0..20_000 {
             let d = [1e-7, 2e-7];
-            let (g, _, x) = m.update_history(1.0, f, xi, d);
+            let (g, _, x) = m.update_history(1.0, f, [xi, 0.0], d);
             let dn = d[0] - (g[0] - f[0]) / kn;
             let ds = d[1] - (g[1] - f[1]) / ks;
             let sn = 0.5 * (g[0] + f[0]);
@@ -289,7 +559,7 @@ mod tests {
             // the cohesive part of the shear stress: |τ| + σ tan φ
             w2 += (ts + sn * 0.75) * ds;
             f = g;
-            xi = x;
+            xi = x[0];
         }
         assert!(xi > 0.999, "xi {xi}");
         let spent = w1 / 18.0 + w2 / 125.0;
@@ -300,9 +570,9 @@ mod tests {
     #[test]
     fn a_spent_joint_is_frictional() {
         let m = eindhoven();
-        let (g, st, xi) = m.update_history(1.0, [0.0, 0.0], 1.0, [1e-6, 0.0]);
-        assert_eq!((g, st, xi), ([0.0, 0.0], ContactState::Open, 1.0));
-        let (g, st, _) = m.update_history(1.0, [0.0, 0.0], 1.0, [-1e-5, 1e-4]);
+        let (g, st, h) = m.update_history(1.0, [0.0, 0.0], [1.0, 0.0], [1e-6, 0.0]);
+        assert_eq!((g, st, h), ([0.0, 0.0], ContactState::Open, [1.0, 0.0]));
+        let (g, st, _) = m.update_history(1.0, [0.0, 0.0], [1.0, 0.0], [-1e-5, 1e-4]);
         assert_eq!(st, ContactState::Slip);
         assert!((g[0] + 82e9 * 1e-5).abs() < 1e-3);
         assert!((g[1] - 0.75 * 82e9 * 1e-5).abs() < 1e-3);

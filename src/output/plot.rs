@@ -117,3 +117,122 @@ fn draw_hoek_bray<DB: DrawingBackend>(
     root.present().map_err(e)?;
     Ok(())
 }
+
+/// One computed load–displacement curve of [`load_displacement_chart`]: its label, its
+/// points (displacement mm, load kN) and its colour index.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CurveSeries {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+    pub color: usize,
+    /// Dashed (a coarser model of the same wall).
+    pub dashed: bool,
+}
+
+/// A reference band of [`load_displacement_chart`]: a load (kN) with a relative width
+/// (the band is load × (1 ± width)), its label and colour index.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Band {
+    pub label: String,
+    pub load: f64,
+    pub width: f64,
+    pub color: usize,
+}
+
+const CURVE_COLORS: [RGBColor; 4] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+];
+
+/// Load (kN) against displacement (mm) of pushed walls (docs/performance.md, "Eindhoven
+/// walls"): one line per computed curve, and reference loads as shaded bands.
+pub fn load_displacement_chart(
+    path: &Path,
+    title: &str,
+    curves: &[CurveSeries],
+    bands: &[Band],
+) -> Result<()> {
+    let svg = path.extension().is_some_and(|e| e == "svg");
+    if svg {
+        let root = SVGBackend::new(path, (900, 640)).into_drawing_area();
+        draw_load_displacement(root, title, curves, bands).map_err(plot_err(path))
+    } else {
+        let root = BitMapBackend::new(path, (900, 640)).into_drawing_area();
+        draw_load_displacement(root, title, curves, bands).map_err(plot_err(path))
+    }
+}
+
+fn draw_load_displacement<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    curves: &[CurveSeries],
+    bands: &[Band],
+) -> std::result::Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let xmax = curves
+        .iter()
+        .flat_map(|c| c.points.iter().map(|p| p.0))
+        .fold(1.0f64, f64::max);
+    let ymax = curves
+        .iter()
+        .flat_map(|c| c.points.iter().map(|p| p.1))
+        .chain(bands.iter().map(|b| b.load * (1.0 + b.width)))
+        .fold(1.0f64, f64::max)
+        * 1.1;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..xmax * 1.02, 0.0..ymax)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("horizontal displacement of the top, mm")
+        .y_desc("horizontal load, kN")
+        .light_line_style(WHITE)
+        .draw()
+        .map_err(e)?;
+    for b in bands {
+        let c = CURVE_COLORS[b.color % CURVE_COLORS.len()];
+        let (lo, hi) = (b.load * (1.0 - b.width), b.load * (1.0 + b.width));
+        chart
+            .draw_series(std::iter::once(Rectangle::new(
+                [(0.0, lo), (xmax * 1.02, hi)],
+                c.mix(0.15).filled(),
+            )))
+            .map_err(e)?
+            .label(b.label.clone())
+            .legend(move |(x, y)| {
+                Rectangle::new([(x - 8, y - 5), (x + 8, y + 5)], c.mix(0.3).filled())
+            });
+        chart
+            .draw_series(LineSeries::new(
+                [(0.0, b.load), (xmax * 1.02, b.load)],
+                c.mix(0.6).stroke_width(1),
+            ))
+            .map_err(e)?;
+    }
+    for s in curves {
+        let c = CURVE_COLORS[s.color % CURVE_COLORS.len()];
+        let style = c.stroke_width(if s.dashed { 1 } else { 2 });
+        let series = if s.dashed {
+            chart
+                .draw_series(DashedLineSeries::new(s.points.iter().copied(), 6, 4, style))
+                .map_err(e)?
+        } else {
+            chart
+                .draw_series(LineSeries::new(s.points.iter().copied(), style))
+                .map_err(e)?
+        };
+        series
+            .label(s.label.clone())
+            .legend(move |(x, y)| PathElement::new([(x - 10, y), (x + 10, y)], style));
+    }
+    super::figures::draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
+    root.present().map_err(e)?;
+    Ok(())
+}

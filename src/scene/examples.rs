@@ -11,7 +11,9 @@ pub const EXAMPLES: &[(&str, &str, &str)] = &[
     ("slope", "the Goodman and Bray (1976) toppling rock slope: 16 columns on a stepped base", SLOPE),
     ("sliding", "dynamic: a 4 m x 4 m block slides down a 30 degree incline, phi = 25 degrees (seed section 4.2, dt = 0.04 s)", SLIDING),
     ("tunnel", "a circular tunnel in rock cut by two joint sets, inside a fixed frame", TUNNEL),
-    ("eindhoven", "the Eindhoven shear wall J4D (Raijmakers and Vermeltfoort 1992): softening joints, 0.30 N/mm2 pre-compression, top pushed 4 mm and held horizontal", EINDHOVEN),
+    ("eindhoven", "the Eindhoven shear wall J4D/J5D (Raijmakers and Vermeltfoort 1992): softening joints with a cap, split bricks, 0.30 N/mm2 pre-compression, top pushed 4 mm held horizontal, arc length", EINDHOVEN),
+    ("eindhoven-j6d", "the Eindhoven shear wall J6D: as eindhoven, 1.21 N/mm2 pre-compression", EINDHOVEN_J6D),
+    ("eindhoven-j7d", "the Eindhoven shear wall J7D: as eindhoven, 2.12 N/mm2 pre-compression", EINDHOVEN_J7D),
 ];
 
 pub fn get(name: &str) -> Option<&'static str> {
@@ -343,20 +345,34 @@ tolerance = 1e-6
 type = "static"
 "#;
 
-const EINDHOVEN: &str = r#"title = "Eindhoven shear wall J4D, pre-compression 0.30 N/mm2 (Raijmakers and Vermeltfoort 1992)"
-# Lourenco and Rots (1997) micro-model data (BENCHMARKS.md V8): solid clay bricks
-# 210 x 52 x 100 mm, 10 mm mortar joints, modelled as expanded bricks (brick plus half
-# a joint all round) with zero-thickness joints; E = 16700 N/mm2, nu = 0.15 (plane
-# stress, 100 mm thick); joints kn = 82 N/mm3, ks = 36 N/mm3 (over a 10 mm band),
-# ft = 0.25 N/mm2, G_f^I = 0.018 N/mm, c = 0.35 N/mm2, tan(phi) = 0.75,
-# G_f^II = 0.125 N/mm. The wall is 990 mm wide; its 16 free courses (992 mm) stand
-# between the clamped bottom and top courses, here a fixed base and a rigid steel beam.
-# The pre-compression p = 0.30 N/mm2 over 990 x 100 mm is 29.7 kN on the beam (1.21 and
-# 2.12 N/mm2: 119.79 kN and 209.88 kN, walls J7D and J9D); the beam is then pushed
-# sideways 4 mm "in a confined way" (Lourenco and Rots 1997): its rotation and its
-# vertical motion held (curve.csv: the horizontal load force_x_N against ux_m; with
-# push_displacement = 0.004 the beam rises freely under a constant pre-compression).
-# Lourenco reports about 50 kN at the peak for the experiments J4D and J5D.
+/// The Eindhoven shear walls (Raijmakers and Vermeltfoort 1992) as Lourenço and Rots
+/// (1997) modelled them: one text, the wall's name, its pre-compression (N/mm²) and the
+/// force on the beam (N) filled in.
+macro_rules! eindhoven_wall {
+    ($wall:literal, $p:literal, $force:literal) => {
+        concat!(
+            "title = \"Eindhoven shear wall ",
+            $wall,
+            ", pre-compression ",
+            $p,
+            " N/mm2 (Raijmakers and Vermeltfoort 1992)\"\n",
+            r#"# The micro-model of Lourenco and Rots (1997), BENCHMARKS.md V8 (docs/performance.md,
+# "Eindhoven walls"): solid clay bricks 210 x 52 x 100 mm with 10 mm mortar joints,
+# modelled as expanded bricks (brick plus half a joint all round) with zero-thickness
+# joints; E = 16700 N/mm2, nu = 0.15 (plane stress, 100 mm thick). Every full brick is
+# split at mid-length by a potential crack (split_bricks) with the brick's tensile
+# strength 2.0 N/mm2. The 16 free courses (990 x 992 mm) stand between the bottom and
+# top courses clamped in steel beams: a fixed base and a rigid steel beam, the bed joints
+# to them mortar. The pre-compression is a load on the beam (p x 990 x 100 mm); the beam
+# is then pushed 4 mm with its rotation and its vertical motion held ("in a confined
+# way": Lourenco 1996), the load followed by arc length (curve.csv: force_x_N against
+# ux_m). Mortar: kn = 82 N/mm3, ks = 36 N/mm3 (over a 10 mm band), ft = 0.25 N/mm2,
+# G_f^I = 0.018 N/mm, c = 0.35 N/mm2, tan(phi) = 0.75, G_f^II = 0.125 N/mm, compressive
+# strength 10.5 N/mm2 (BENCHMARKS.md V8); cap C_ss = 9, G_fc = 5 N/mm, kappa_p =
+# 0.093 mm, brick cracks G_f^I = 0.08 N/mm (Lourenco 1996 as recalled, not checked
+# against the source); brick cracks c = 1.4 ft, phi = 45 deg, G_f^II = 10 G_f^I
+# (assumed). Bricks with corner nodes only (fast); for mesh-converged loads add
+# mesh_size = 0.026 to [[generate]] (docs/performance.md).
 
 [model]
 plane = "stress"
@@ -386,18 +402,24 @@ tensile_strength = 0.25e6
 softening = "exponential"
 fracture_energy_i = 18.0
 fracture_energy_ii = 125.0
+compressive_strength = 10.5e6
+cap_shear_factor = 9.0
+compressive_fracture_energy = 5000.0
+cap_peak_displacement = 0.093e-3
 
-# the bottom and top courses are clamped in the steel beams: their contacts with the
-# base and the beam do not fail
+# the potential cracks at mid-length of the bricks (a stiff dummy band)
 [[joint]]
-name = "clamped"
-normal_modulus = 8.2e8
-shear_modulus = 3.6e8
+name = "brick"
+normal_modulus = 1e13
+shear_modulus = 1e13
 band = 0.010
-friction_angle = 36.8699
-cohesion = 1e9
-tensile_strength = 1e9
-blocks = ["base", "beam"]
+friction_angle = 45.0
+cohesion = 2.8e6
+tensile_strength = 2.0e6
+softening = "exponential"
+fracture_energy_i = 80.0
+fracture_energy_ii = 800.0
+within = "unit"
 
 [[generate]]
 type = "wall"
@@ -409,6 +431,7 @@ brick_height = 0.052
 joint = 0.01
 base = true
 top_beam = false
+split_bricks = true
 
 [[block]]
 name = "beam"
@@ -418,8 +441,11 @@ vertices = [[0.0, 0.992], [0.99, 0.992], [0.99, 1.092], [0.0, 1.092]]
 
 [[load]]
 block = "beam"
-force = [0.0, -29.7e3]
-
+"#,
+            "force = [0.0, ",
+            $force,
+            "]\n",
+            r#"
 [contacts]
 joint = "mortar"
 tolerance = 1e-6
@@ -429,7 +455,16 @@ type = "static"
 load_steps = 80
 push_block = "beam"
 push_displacement = [0.004, 0.0]
-"#;
+path = "arc_length"
+tolerance = 1e-5
+"#
+        )
+    };
+}
+
+const EINDHOVEN: &str = eindhoven_wall!("J4D/J5D", "0.30", "-29.7e3");
+const EINDHOVEN_J6D: &str = eindhoven_wall!("J6D", "1.21", "-119.79e3");
+const EINDHOVEN_J7D: &str = eindhoven_wall!("J7D", "2.12", "-209.88e3");
 
 #[cfg(test)]
 mod tests {

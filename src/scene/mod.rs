@@ -82,9 +82,29 @@ pub struct Joint {
     pub fracture_energy_i: f64,
     /// Mode-II fracture energy G_f^II, N/m (softening joints).
     pub fracture_energy_ii: f64,
+    /// The compression cap of a softening joint (`compressive_strength`), if any.
+    pub cap: Option<JointCap>,
+    /// Contacts between two blocks of one masonry unit (the halves of a split brick)
+    /// take this joint (`within = "unit"`).
+    pub within_unit: bool,
     /// Indices into [`Scene::blocks`]: contacts touching any of them take this joint
     /// instead of the `[contacts]` one (`blocks`; empty: none).
     pub blocks: Vec<usize>,
+}
+
+/// `[[joint]] compressive_strength` and its companions: the elliptic compression cap of
+/// a softening joint (docs/theory.md, "Compression cap"; Lourenço and Rots 1997).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointCap {
+    /// fₘ, Pa.
+    pub compressive_strength: f64,
+    /// C_ss, the weight of the shear stress in the cap (`cap_shear_factor`, default 9).
+    pub shear_factor: f64,
+    /// G_fc, N/m (`compressive_fracture_energy`); `None`: perfectly plastic cap.
+    pub fracture_energy: Option<f64>,
+    /// κₚ, m, the plastic relative displacement at the peak (`cap_peak_displacement`;
+    /// with `compressive_fracture_energy`).
+    pub peak_displacement: f64,
 }
 
 /// `[[joint]] softening`: how the tensile strength and the cohesion degrade.
@@ -126,6 +146,9 @@ pub struct Block {
     pub prescribed: Option<[f64; 2]>,
     /// Line of the block's table (or of its `[[generate]]` entry) in the scene file.
     pub line: Option<usize>,
+    /// The masonry unit (brick) the block is part of: the two halves of a brick split by
+    /// a potential crack (`split_bricks` of the wall generator) share one; `None`: none.
+    pub unit: Option<usize>,
 }
 
 /// `[contacts]`: how contacts are found between touching blocks.
@@ -219,8 +242,15 @@ impl Scene {
     }
 
     /// The joint (index into [`Scene::joints`]) of a contact between blocks `a` and `b`:
-    /// the first joint whose `blocks` names either of them, else the `[contacts]` joint.
+    /// within one masonry unit the first joint with `within = "unit"`; else the first
+    /// joint whose `blocks` names either of them; else the `[contacts]` joint.
     pub fn joint_of(&self, a: usize, b: usize) -> usize {
+        let unit = |i: usize| self.blocks.get(i).and_then(|x| x.unit);
+        if unit(a).is_some() && unit(a) == unit(b) {
+            if let Some(j) = self.joints.iter().position(|j| j.within_unit) {
+                return j;
+            }
+        }
         self.joints
             .iter()
             .position(|j| j.blocks.contains(&a) || j.blocks.contains(&b))

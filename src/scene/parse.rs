@@ -71,6 +71,11 @@ struct RawJoint {
     softening: Option<String>,
     fracture_energy_i: Option<f64>,
     fracture_energy_ii: Option<f64>,
+    compressive_strength: Option<f64>,
+    cap_shear_factor: Option<f64>,
+    compressive_fracture_energy: Option<f64>,
+    cap_peak_displacement: Option<f64>,
+    within: Option<String>,
     blocks: Option<Vec<String>>,
 }
 
@@ -145,6 +150,8 @@ pub const ANALYSIS_KEYS: &[&str] = &[
     "push_block",
     "push_displacement",
     "gravity_steps",
+    "path",
+    "arc_length",
     "integrator",
     "alpha",
     "rho_inf",
@@ -452,6 +459,19 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
             }
             (gf1, gf2)
         };
+        let cap = joint_cap(&src, at, &place, j, softening)?;
+        let within_unit = match j.within.as_deref() {
+            None => false,
+            Some("unit") => true,
+            Some(other) => {
+                return Err(err_at(
+                    src.key_line(at, "within"),
+                    format!("{place} key 'within'"),
+                    format!("unknown value \"{other}\""),
+                    "use within = \"unit\" (the joint of the potential cracks inside split bricks), or remove the key",
+                ))
+            }
+        };
         joints.push(Joint {
             name,
             normal_modulus,
@@ -465,6 +485,8 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
             softening,
             fracture_energy_i,
             fracture_energy_ii,
+            cap,
+            within_unit,
             blocks: Vec::new(),
         });
         joint_blocks.push((at, place.clone(), j.blocks.clone().unwrap_or_default()));
@@ -569,10 +591,12 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
             mesh_size,
             prescribed: b.prescribed,
             line: Some(src.key_line(at, "vertices")),
+            unit: None,
         });
     }
 
     // [[generate]]
+    let mut next_unit = 0;
     for (i, g) in raw.generate.iter().enumerate() {
         let at = g.span().start;
         let line = src.line(at);
@@ -655,6 +679,13 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
                 "reduce the counts of the generator",
             ));
         }
+        // the generator's masonry units, numbered after those of earlier entries
+        let units = next_unit;
+        next_unit += made
+            .iter()
+            .filter_map(|b| b.unit)
+            .max()
+            .map_or(0, |u| u + 1);
         for gb in made {
             blocks.push(Block {
                 name: match &prefix {
@@ -672,6 +703,7 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
                 mesh_size,
                 prescribed: None,
                 line: Some(line),
+                unit: gb.unit.map(|u| units + u),
             });
         }
     }
@@ -1112,6 +1144,7 @@ fn import_blocks(
                 mesh_size,
                 prescribed: None,
                 line: Some(line),
+                unit: None,
             })
         })
         .collect()
@@ -1126,6 +1159,92 @@ fn parse_kind(k: Option<&str>) -> std::result::Result<BlockKind, (String, String
             "use \"deformable\" or \"rigid\"".into(),
         )),
     }
+}
+
+/// The compression cap of a `[[joint]]` (`compressive_strength` and its companions),
+/// checked: only on softening joints; G_fc and κₚ together.
+fn joint_cap(
+    src: &Src,
+    at: usize,
+    place: &str,
+    j: &RawJoint,
+    softening: JointSoftening,
+) -> Result<Option<JointCap>> {
+    let companions = [
+        ("cap_shear_factor", j.cap_shear_factor),
+        ("compressive_fracture_energy", j.compressive_fracture_energy),
+        ("cap_peak_displacement", j.cap_peak_displacement),
+    ];
+    let Some(fc) = j.compressive_strength else {
+        if let Some((key, _)) = companions.iter().find(|(_, v)| v.is_some()) {
+            return Err(err_at(
+                src.key_line(at, key),
+                format!("{place} key '{key}'"),
+                "a parameter of the compression cap is given without compressive_strength",
+                "add compressive_strength = <Pa> (the cap's strength), or remove the key",
+            ));
+        }
+        return Ok(None);
+    };
+    let fc = check_value(src, at, place, "compressive_strength", fc, true, "Pa")?;
+    if softening == JointSoftening::None {
+        return Err(err_at(
+            src.key_line(at, "compressive_strength"),
+            format!("{place} key 'compressive_strength'"),
+            "the compression cap belongs to softening joints",
+            "add softening = \"exponential\" with the fracture energies, or remove compressive_strength",
+        ));
+    }
+    let shear_factor = match j.cap_shear_factor {
+        None => 9.0,
+        Some(v) => check_value(
+            src,
+            at,
+            place,
+            "cap_shear_factor",
+            v,
+            true,
+            "(dimensionless)",
+        )?,
+    };
+    let (fracture_energy, peak_displacement) =
+        match (j.compressive_fracture_energy, j.cap_peak_displacement) {
+            (None, None) => (None, 0.0),
+            (Some(g), Some(k)) => (
+                Some(check_value(
+                    src,
+                    at,
+                    place,
+                    "compressive_fracture_energy",
+                    g,
+                    true,
+                    "N/m",
+                )?),
+                check_value(src, at, place, "cap_peak_displacement", k, true, "m")?,
+            ),
+            (Some(_), None) => {
+                return Err(err_at(
+                    src.key_line(at, "compressive_fracture_energy"),
+                    format!("{place} key 'compressive_fracture_energy'"),
+                    "the cap softens with compressive_fracture_energy but its peak is not given",
+                    "add cap_peak_displacement = <m> (the plastic relative displacement at the peak), or remove compressive_fracture_energy for a perfectly plastic cap",
+                ))
+            }
+            (None, Some(_)) => {
+                return Err(err_at(
+                    src.key_line(at, "cap_peak_displacement"),
+                    format!("{place} key 'cap_peak_displacement'"),
+                    "the cap's peak is given without compressive_fracture_energy",
+                    "add compressive_fracture_energy = <N/m>, or remove cap_peak_displacement for a perfectly plastic cap",
+                ))
+            }
+        };
+    Ok(Some(JointCap {
+        compressive_strength: fc,
+        shear_factor,
+        fracture_energy,
+        peak_displacement,
+    }))
 }
 
 fn check_value(

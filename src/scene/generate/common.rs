@@ -137,6 +137,7 @@ pub fn block(name: impl Into<String>, vertices: Vec<P>, fixed: bool) -> Generate
         name: name.into(),
         vertices,
         fixed,
+        unit: None,
     }
 }
 

@@ -26,6 +26,9 @@ pub struct GeneratedBlock {
     pub vertices: Vec<[f64; 2]>,
     /// Foundation / frame blocks are fixed.
     pub fixed: bool,
+    /// The masonry unit the block is part of, numbered from 0 within the generator's
+    /// output: the two halves of a brick split by a potential crack share one.
+    pub unit: Option<usize>,
 }
 
 /// A generator error: the key at fault (if any), what is wrong and how to fix it.

@@ -73,6 +73,7 @@ pub fn generate(params: &toml::Table) -> Result<Vec<GeneratedBlock>, GenError> {
             base: p.base,
             top_beam: false,
             openings: p.openings,
+            split_bricks: false,
         },
         ("courses", "blocks_per_course"),
     )

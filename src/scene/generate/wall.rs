@@ -8,6 +8,10 @@
 //! of 4.5 bricks (`bricks_per_course = 4.5`) gives courses of 4 full + 1 half brick, as in
 //! the Raijmakers–Vermeltfoort walls.
 //!
+//! With `split_bricks = true` every full brick is two blocks, its halves `…_a` and `…_b`
+//! meeting at mid-length, one masonry unit: the potential crack through the brick of
+//! Lourenço's micro-model, whose contacts take the `[[joint]]` with `within = "unit"`.
+//!
 //! Openings (windows, doors) remove the bricks inside them; bricks partly inside are cut
 //! with `geo::BooleanOps`, and the cut coordinates are snapped back to the exact course
 //! and opening lines so that neighbours share their edges.
@@ -41,6 +45,7 @@ pub struct Params {
     pub base: bool,
     pub top_beam: bool,
     pub openings: Vec<Opening>,
+    pub split_bricks: bool,
 }
 
 impl Default for Params {
@@ -55,6 +60,7 @@ impl Default for Params {
             base: true,
             top_beam: false,
             openings: Vec::new(),
+            split_bricks: false,
         }
     }
 }
@@ -75,6 +81,10 @@ pub const KEYS: &[(&str, &str)] = &[
         "openings",
         "an array of tables {x, y, width, height} in m, relative to the origin",
     ),
+    (
+        "split_bricks",
+        "true or false (every full brick in two halves, one masonry unit)",
+    ),
 ];
 
 /// A running-bond wall, in blocks (joint included). Shared with `tower`.
@@ -88,6 +98,8 @@ pub(crate) struct WallSpec {
     pub base: bool,
     pub top_beam: bool,
     pub openings: Vec<Opening>,
+    /// Split every full brick at mid-length into two blocks of one unit.
+    pub split_bricks: bool,
 }
 
 pub fn generate(params: &toml::Table) -> Result<Vec<GeneratedBlock>, GenError> {
@@ -105,6 +117,7 @@ pub fn generate(params: &toml::Table) -> Result<Vec<GeneratedBlock>, GenError> {
             base: p.base,
             top_beam: p.top_beam,
             openings: p.openings,
+            split_bricks: p.split_bricks,
         },
         ("courses", "bricks_per_course"),
     )
@@ -184,6 +197,7 @@ pub(crate) fn build(w: WallSpec, keys: (&str, &str)) -> Result<Vec<GeneratedBloc
     );
     let tol = 1e-7 * (l + h);
     let mut out = Vec::new();
+    let mut units = 0;
     if w.base {
         out.push(block(
             "base",
@@ -205,7 +219,18 @@ pub(crate) fn build(w: WallSpec, keys: (&str, &str)) -> Result<Vec<GeneratedBloc
                 })
                 .collect();
             if touching.is_empty() {
-                out.push(block(name, brick, false));
+                if w.split_bricks && x1 - x0 > 0.75 * l {
+                    // a full brick: two halves of one unit
+                    let xm = 0.5 * (x0 + x1);
+                    for (suffix, r) in [("a", rect(x0, y0, xm, y1)), ("b", rect(xm, y0, x1, y1))] {
+                        let mut b = block(format!("{name}_{suffix}"), r, false);
+                        b.unit = Some(units);
+                        out.push(b);
+                    }
+                    units += 1;
+                } else {
+                    out.push(block(name, brick, false));
+                }
                 continue;
             }
             if touching.iter().any(|r| {
@@ -324,6 +349,26 @@ mod tests {
         for k in 1..18 {
             assert!((course_contact(&b, k) - w).abs() < 1e-9);
         }
+    }
+
+    /// `split_bricks`: every full brick is two halves of one unit meeting at mid-length;
+    /// the half bricks at the ends of the odd courses stay whole, without a unit.
+    #[test]
+    fn split_bricks_make_two_halves_of_one_unit() {
+        let b = run("wall", "courses = 2\nbricks_per_course = 4.5\nbrick_length = 0.21\nbrick_height = 0.052\njoint = 0.01\nsplit_bricks = true");
+        check_blocks(&b);
+        // course 1: 4 full bricks + 1 half, course 2: half + 4 full; 8 full bricks split
+        assert_eq!(b.len(), 1 + 8 * 2 + 2);
+        let whole = run("wall", "courses = 2\nbricks_per_course = 4.5\nbrick_length = 0.21\nbrick_height = 0.052\njoint = 0.01");
+        assert!((total_area(&b[1..]) - total_area(&whole[1..])).abs() < 1e-12);
+        let (a, h) = (find(&b, "c1_b2_a"), find(&b, "c1_b2_b"));
+        assert_eq!(a.unit, h.unit);
+        assert!(a.unit.is_some());
+        assert!((shared_length(&a.vertices, &h.vertices) - 0.062).abs() < 1e-12);
+        assert_ne!(find(&b, "c1_b1_a").unit, a.unit);
+        assert_eq!(find(&b, "c2_b1").unit, None);
+        let units: std::collections::BTreeSet<_> = b.iter().filter_map(|x| x.unit).collect();
+        assert_eq!(units.len(), 8);
     }
 
     #[test]

@@ -1,0 +1,547 @@
+//! Arc-length path following of a push (`[analysis] path = "arc_length"`; docs/theory.md,
+//! "Arc length"): Crisfield's (1981) cylindrical arc length. The pushed rigid block is no
+//! longer moved by prescribed increments: it carries the force λ P̂ (N), P̂ the unit vector
+//! of `push_displacement`'s non-zero components, and λ is an unknown of every increment,
+//! fixed by the constraint that the increment Δu of the free unknowns has the length Δl:
+//!
+//! ```text
+//! ‖Δu‖² = n Δl²                                            (theory.md, Eq. A1)
+//! ```
+//!
+//! (‖·‖ the Euclidean norm over the n free unknowns, so Δl is their root-mean-square
+//! increment, m). Each iteration solves K δu_r = r and K δu_P = P̂ with the tangent matrix
+//! K (the contacts' tangents by finite differences of their laws, LU; the secant matrix
+//! where the tangent step does not lower the out-of-balance force), and δλ is the root of
+//! the quadratic Eq. A1 for Δu + δu_r + δλ δu_P that keeps the increment closest in
+//! direction to its previous iterate (Crisfield's angle criterion).
+//! The load can fall while the displacement grows, and both can fall together: the
+//! path is followed through limit points of the load and through snap-backs, where
+//! displacement control has no solution in the neighbourhood of the last converged state.
+//!
+//! The block's rotation is held as under displacement control, and so is any translation
+//! whose `push_displacement` component is 0 (its increment pinned to zero, its force a
+//! reaction); a vertical motion left free (`push_displacement` a number) stays free.
+//!
+//! This module is a child of [`super`] (the static driver), whose state it advances.
+
+use super::*;
+
+/// Changes of state of a contact within one arc-length increment after which its tangent
+/// is the chord from its committed force (and its secant the elastic springs): on the
+/// Eindhoven wall (docs/performance.md) contacts at the kink of a softening law (its peak,
+/// the onset of slip) alternated between the two sides for every iteration of an
+/// increment, and on the snap-back joint of tests/validation_softening.rs Newton cycled at
+/// the peak with the residual between 2·10⁻⁶ and 7·10⁻⁵ of the load.
+pub(super) const FLIP_LIMIT: u32 = 3;
+
+/// `[analysis] path = "arc_length"` and `arc_length` (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArcLength {
+    /// Δl (m), the root-mean-square increment of the free unknowns; `None`: the length
+    /// whose elastic predictor moves the block by `push_displacement / load_steps` at the
+    /// first increment.
+    pub length: Option<f64>,
+}
+
+impl ArcLength {
+    /// The path-following settings of a scene: `None` for displacement control.
+    pub fn from_scene(scene: &Scene, push: Option<&Push>) -> Result<Option<ArcLength>> {
+        let x = &scene.analysis.extra;
+        let place = super::super::analysis_place;
+        let path = match x.get("path") {
+            None => None,
+            Some(v) => Some(v.as_str().ok_or_else(|| {
+                Error::new("path is not a string")
+                    .place(place("path"))
+                    .fix("give path = \"displacement\" (the default) or \"arc_length\"")
+            })?),
+        };
+        let arc = match path {
+            None | Some("displacement") => false,
+            Some("arc_length") => true,
+            Some(other) => {
+                return Err(Error::new(format!("unknown path \"{other}\""))
+                    .place(place("path"))
+                    .fix("give path = \"displacement\" (the default) or \"arc_length\""))
+            }
+        };
+        if !arc {
+            if x.contains_key("arc_length") {
+                return Err(
+                    Error::new("arc_length is given but the path is not arc length")
+                        .place(place("arc_length"))
+                        .fix("add path = \"arc_length\", or remove arc_length"),
+                );
+            }
+            return Ok(None);
+        }
+        if push.is_none() {
+            return Err(Error::new("arc-length path following needs a pushed block")
+                .place(place("path"))
+                .fix("add push_block = \"<free rigid block>\" and push_displacement = <m> (the end of the path), or remove path"));
+        }
+        let length = match x.get("arc_length") {
+            None => None,
+            Some(_) => Some(super::super::analysis_number(
+                scene,
+                "arc_length",
+                0.0,
+                1e-15,
+                1e3,
+            )?),
+        };
+        Ok(Some(ArcLength { length }))
+    }
+}
+
+/// The set-up of the arc-length push: the unknowns of the block, P̂ and the pins.
+struct Setup {
+    /// Unit load vector P̂ over all unknowns (N per unit λ).
+    p: Vec<f64>,
+    /// First unknown of the block and the direction P̂ in the plane.
+    first: usize,
+    dir: Point,
+    /// The end of the path: the displacement along P̂ (m).
+    target: f64,
+}
+
+fn setup(d: &Driver, push: &Push) -> Setup {
+    let crate::mesh::BlockDofs::Rigid { first, .. } = d.cur.blocks[push.block].dofs else {
+        unreachable!("Push::from_scene admits rigid blocks only")
+    };
+    let f = first as usize;
+    let (h, v) = (push.horizontal, push.vertical.unwrap_or(0.0));
+    let target = h.hypot(v);
+    let dir = if target > 0.0 {
+        [h / target, v / target]
+    } else {
+        [1.0, 0.0]
+    };
+    let mut p = vec![0.0; d.cur.n_dofs];
+    p[f] = dir[0];
+    p[f + 1] = dir[1];
+    Setup {
+        p,
+        first: f,
+        dir,
+        target,
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Why an arc-length increment failed.
+enum StepFailure {
+    /// Not converged: the relative out-of-balance force left.
+    NoConvergence(f64),
+    /// The constraint has no real root for any δλ near the path.
+    Divergence,
+}
+
+impl Driver<'_> {
+    /// The tangent of every contact's law at the trial (N/m, in the contact's frame:
+    /// rows (Fₙ, Fₛ), columns (δₙ, δₛ)), by forward differences of the law's return
+    /// from the committed state: ∂F/∂δ ≈ (F(Δδ + ε eⱼ) − F(Δδ)) / ε, ε = 10⁻⁷ of the
+    /// band's elastic displacement at its strength scale or of the increment, whichever
+    /// is larger. A softening contact gets its negative stiffness, a spent or open one
+    /// nothing, a slipping one the friction coupling ∂Fₛ/∂δₙ.
+    fn tangent_local(&self, trial: &Trial) -> Vec<crate::assembly::LocalStiffness> {
+        use rayon::prelude::*;
+        let (laws, areas, committed, flips) = (&self.law, &self.area, &self.committed, &self.flips);
+        (0..areas.len())
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|k| {
+                let law = laws.get(k);
+                let a = areas[k];
+                let sp = law.springs(a);
+                let f0 = committed.force[k];
+                if flips.get(k).is_some_and(|&n| n >= FLIP_LIMIT) {
+                    // at the kink of its law (the peak of a softening joint) the tangent
+                    // jumps and Newton cycles between its two sides: the chord from the
+                    // committed force to the trial's lies between the two slopes, and
+                    // the iterations close in on the kink as by regula falsi
+                    let (d, f) = (trial.rel[k], trial.force[k]);
+                    let chord = |j: usize, k0: f64| {
+                        if d[j].abs() > 1e-9 * (f0[j].abs() / k0).max(1e-15) {
+                            (f[j] - f0[j]) / d[j]
+                        } else {
+                            k0
+                        }
+                    };
+                    return [[chord(0, sp.kn), 0.0], [0.0, chord(1, sp.ks)]];
+                }
+                let h = committed.history.get(k).copied().unwrap_or([0.0; 2]);
+                let d = trial.rel[k];
+                let base = trial.force[k];
+                let scale = [
+                    (f0[0].abs() / sp.kn).max(d[0].abs()).max(1e-12),
+                    (f0[1].abs() / sp.ks).max(d[1].abs()).max(1e-12),
+                ];
+                let mut t = [[0.0; 2]; 2];
+                for j in 0..2 {
+                    let eps = 1e-7 * scale[j];
+                    let mut dd = d;
+                    dd[j] += eps;
+                    let (f, _, _) = law.update_history(a, f0, h, dd);
+                    t[0][j] = (f[0] - base[0]) / eps;
+                    t[1][j] = (f[1] - base[1]) / eps;
+                }
+                t
+            })
+            .collect()
+    }
+
+    /// Solve K x = b for the two right-hand sides: with the tangent matrix of `trial`
+    /// (`tangent`: nonsymmetric and, past a peak, indefinite: LU) or its secant matrix
+    /// (Cholesky; K_s + ε K₀ when K_s is singular). `None` when the matrix cannot be
+    /// factorized.
+    fn solve_pair(
+        &mut self,
+        trial: &Trial,
+        b1: &[f64],
+        b2: &[f64],
+        tangent: bool,
+    ) -> Result<Option<(Vec<f64>, Vec<f64>)>> {
+        let (mut x1, mut x2) = (b1.to_vec(), b2.to_vec());
+        if tangent {
+            let local = self.tangent_local(trial);
+            self.system
+                .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+            Self::pin_rows(&self.pins, &mut self.kbuf);
+            if self.lu.is_none() {
+                self.lu = Some(crate::solve::backend("faer-lu")?);
+            }
+            let size = self.model_size();
+            let lu = self.lu.as_mut().expect("created above");
+            let ok = lu.factorize(&self.kbuf).is_ok()
+                && lu.solve(&mut x1).is_ok()
+                && lu.solve(&mut x2).is_ok()
+                && x1.iter().chain(&x2).all(|v| v.is_finite())
+                // LU has no pivot measure: a singular tangent shows as a huge response
+                && x2.iter().all(|v| v.abs() < 1e3 * size);
+            return Ok(ok.then_some((x1, x2)));
+        }
+        let local = self.local_stiffness(trial, false);
+        self.system
+            .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+        Self::pin_rows(&self.pins, &mut self.kbuf);
+        self.held = Held::Nothing;
+        let ok = self.backend.factorize(&self.kbuf).is_ok()
+            && !super::super::singular_pivots(&*self.backend);
+        if !ok {
+            let Some(x1) = self.blended_step(trial, b1, BLEND)? else {
+                return Ok(None);
+            };
+            // the blended matrix is still factorized
+            return Ok(self.backend.solve(&mut x2).is_ok().then_some((x1, x2)));
+        }
+        let ok = self.backend.solve(&mut x1).is_ok()
+            && self.backend.solve(&mut x2).is_ok()
+            && x1.iter().chain(&x2).all(|v| v.is_finite());
+        Ok(ok.then_some((x1, x2)))
+    }
+
+    /// One correction on the arc from the iterate `dq` at the load factor `lam` (the
+    /// out-of-balance force `r`, its norm `rn`): the solves with the tangent or secant
+    /// matrix, δλ from the constraint ‖dq + δu_r + δλ δu_P‖² = `len2` (the root that
+    /// turns the increment least), and backtracking (the best of the steps 1, ½, ¼, ⅛
+    /// where the full one raises the out-of-balance force). Returns (the norm of the
+    /// out-of-balance force after it, the new dq, its δλ), or `None` when the matrix
+    /// cannot be factorized or the line meets no point of the cylinder.
+    #[allow(clippy::too_many_arguments)]
+    fn corrector(
+        &mut self,
+        trial: &Trial,
+        r: &[f64],
+        rn: f64,
+        (p, base): (&[f64], &[f64]),
+        dq: &[f64],
+        lam: f64,
+        len2: f64,
+        tangent: bool,
+    ) -> Result<Option<(f64, Vec<f64>, f64)>> {
+        let Some((dr, dp)) = self.solve_pair(trial, r, p, tangent)? else {
+            return Ok(None);
+        };
+        // ‖dq + dr + δλ dp‖² = n Δl²: a δλ² + b δλ + c = 0
+        let w: Vec<f64> = dq.iter().zip(&dr).map(|(a, b)| a + b).collect();
+        let a = dot(&dp, &dp);
+        let b = 2.0 * dot(&dp, &w);
+        let c = dot(&w, &w) - len2;
+        let disc = b * b - 4.0 * a * c;
+        if disc < 0.0 || a <= 0.0 {
+            return Ok(None);
+        }
+        let sq = disc.sqrt();
+        let score = |l: f64| {
+            dq.iter()
+                .zip(&w)
+                .zip(&dp)
+                .map(|((q, wi), pi)| q * (wi + l * pi))
+                .sum::<f64>()
+        };
+        let roots = [(-b + sq) / (2.0 * a), (-b - sq) / (2.0 * a)];
+        let dl = if score(roots[0]) >= score(roots[1]) {
+            roots[0]
+        } else {
+            roots[1]
+        };
+        let zero = vec![[0.0; 2]; self.cur.blocks.len()];
+        let mut best: Option<(f64, Vec<f64>, f64)> = None;
+        let mut alpha = 1.0;
+        for _ in 0..4 {
+            let cand: Vec<f64> = dq
+                .iter()
+                .zip(&w)
+                .zip(&dp)
+                .map(|((q, wi), pi)| q + alpha * (wi + dl * pi - q))
+                .collect();
+            let fe: Vec<f64> = base
+                .iter()
+                .zip(p)
+                .map(|(b, q)| b + (lam + alpha * dl) * q)
+                .collect();
+            let t = self.trial(&cand, &zero);
+            let rn2 = Self::norm(&self.out_of_balance(&fe, &t.f_int));
+            if best.as_ref().is_none_or(|b| rn2 < b.0) {
+                best = Some((rn2, cand, alpha * dl));
+            }
+            if rn2 <= rn {
+                break;
+            }
+            alpha *= 0.5;
+        }
+        Ok(best)
+    }
+
+    /// One arc-length increment of length `dl` (m, root-mean-square) from the committed
+    /// state at the load factor `lam0`: the converged trial and its Δλ, or why not.
+    fn arc_step(
+        &mut self,
+        base: &[f64],
+        p: &[f64],
+        lam0: f64,
+        dl: f64,
+        previous: Option<(&[f64], f64)>,
+    ) -> Result<std::result::Result<(Trial, f64), StepFailure>> {
+        let n = self.cur.n_dofs;
+        let zero = vec![[0.0; 2]; self.cur.blocks.len()];
+        let free = n - self.pins.len();
+        let len2 = dl * dl * free as f64;
+        let f_ext =
+            |lam: f64| -> Vec<f64> { base.iter().zip(p).map(|(b, q)| b + lam * q).collect() };
+        // predictor: the last increment scaled to the arc length (a secant predictor,
+        // which turns with the path at limit points and snap-backs), or at the first
+        // increment the secant matrix's response to P̂
+        let mut dq = vec![0.0; n];
+        let mut dlam;
+        match previous {
+            Some((prev, prev_dlam)) => {
+                let f = (len2 / dot(prev, prev).max(1e-300)).sqrt();
+                for (q, a) in dq.iter_mut().zip(prev) {
+                    *q = f * a;
+                }
+                dlam = f * prev_dlam;
+            }
+            None => {
+                let trial = self.trial(&dq, &zero);
+                let r = self.out_of_balance(&f_ext(lam0), &trial.f_int);
+                let Some((ur, up)) = self.solve_pair(&trial, &r, p, true)? else {
+                    return Ok(Err(StepFailure::Divergence));
+                };
+                dlam = (len2 / dot(&up, &up).max(1e-300)).sqrt();
+                for ((q, a), b) in dq.iter_mut().zip(&ur).zip(&up) {
+                    *q = a + dlam * b;
+                }
+            }
+        }
+        let size = self.model_size();
+        self.flips = vec![0; self.cur.contacts.len()];
+        let mut prev_state: Option<Vec<ContactState>> = None;
+        let (mut best_rn, mut best_it) = (f64::INFINITY, 0);
+        let mut residual = f64::INFINITY;
+        for it in 0..self.settings.max_iterations {
+            self.stats.iterations += 1;
+            let fe = f_ext(lam0 + dlam);
+            let trial = self.trial(&dq, &zero);
+            let r = self.out_of_balance(&fe, &trial.f_int);
+            let scale = self.force_scale(&fe, &trial.f_int);
+            let rn = Self::norm(&r);
+            residual = rn / scale;
+            if let Some(pr) = self.progress.as_deref_mut() {
+                pr.iteration(it, residual);
+            }
+            if let Some(ps) = &prev_state {
+                for (c, (a, b)) in self.flips.iter_mut().zip(ps.iter().zip(&trial.state)) {
+                    *c += u32::from(a != b);
+                }
+            }
+            if super::super::tracing() {
+                eprintln!(
+                    "arc it {it} residual {residual:.3e} load {:.6e}",
+                    lam0 + dlam
+                );
+            }
+            // converged on the out-of-balance force alone: the forces are the laws' at
+            // the iterate, so a small residual is equilibrium whatever states the last
+            // iterate had (at the kink of a law the two states give the same force, and
+            // the iterates step from one side to the other by 10⁻¹¹ m)
+            if it > 0 && rn <= self.settings.tolerance * scale {
+                self.report.iterations = it;
+                self.report.residual = residual;
+                return Ok(Ok((trial, dlam)));
+            }
+            if rn < STALL_PROGRESS * best_rn {
+                best_rn = rn;
+                best_it = it;
+            } else if it - best_it >= STALL_ITERATIONS {
+                break;
+            }
+            prev_state = Some(trial.state.clone());
+            // safeguarded Newton: the tangent step, or the secant one where the tangent
+            // step does not lower the out-of-balance force (a piece whose contacts are
+            // all softening has a tangent near zero, and its step throws the piece far)
+            let lam = lam0 + dlam;
+            let mut pick = self.corrector(&trial, &r, rn, (p, base), &dq, lam, len2, true)?;
+            if pick.as_ref().is_none_or(|t| t.0 > rn) {
+                if let Some(sec) =
+                    self.corrector(&trial, &r, rn, (p, base), &dq, lam, len2, false)?
+                {
+                    if sec.0 < rn || pick.is_none() {
+                        pick = Some(sec);
+                    }
+                }
+            }
+            let Some((_, next, dl_it)) = pick else {
+                return Ok(Err(StepFailure::NoConvergence(residual)));
+            };
+            dq = next;
+            dlam += dl_it;
+            let dmax = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if !dmax.is_finite() || dmax > 0.5 * size {
+                return Ok(Err(StepFailure::Divergence));
+            }
+        }
+        Ok(Err(StepFailure::NoConvergence(residual)))
+    }
+}
+
+/// Follow the push of `push` by arc length from the committed state under the external
+/// force `base` (N), to the displacement `push_displacement` along P̂, in increments of
+/// the settings' Δl (halved when one fails, up to `max_cuts` times in a row, and grown
+/// back after increments that converge). Returns the fraction of the path's end reached
+/// and, when it stopped short, why.
+pub(super) fn run(
+    d: &mut Driver,
+    base: &[f64],
+    push: &Push,
+    arc: &ArcLength,
+    steps: usize,
+) -> Result<(f64, Option<String>)> {
+    let s = setup(d, push);
+    let f = s.first;
+    let mut pins = vec![(f + 2, 0.0)];
+    if push.horizontal == 0.0 {
+        pins.push((f, 0.0));
+    }
+    if push.vertical == Some(0.0) {
+        pins.push((f + 1, 0.0));
+    }
+    d.pins = pins;
+    d.held = Held::Nothing;
+    let start = [d.committed.u[f], d.committed.u[f + 1]];
+    let along = |d: &Driver| {
+        (d.committed.u[f] - start[0]) * s.dir[0] + (d.committed.u[f + 1] - start[1]) * s.dir[1]
+    };
+    let p0 = d.push_point(push.block, 0.0, None);
+    d.push_curve.push(p0);
+    // Δl: given, or the one whose elastic predictor moves the block by target / steps
+    let dl_max = match arc.length {
+        Some(l) => l,
+        None => {
+            let zero = vec![[0.0; 2]; d.cur.blocks.len()];
+            let trial = d.trial(&vec![0.0; d.cur.n_dofs], &zero);
+            let Some((_, up)) = d.solve_pair(&trial, &vec![0.0; d.cur.n_dofs], &s.p, true)? else {
+                return Ok((
+                    0.0,
+                    Some("the pushed block is free to move: no stiffness holds it".into()),
+                ));
+            };
+            let moved = up[f] * s.dir[0] + up[f + 1] * s.dir[1];
+            let free = (d.cur.n_dofs - d.pins.len()) as f64;
+            (dot(&up, &up) / free).sqrt() * (s.target / steps as f64) / moved.abs().max(1e-300)
+        }
+    };
+    let mut dl = dl_max;
+    let mut lam = 0.0;
+    // the last converged increment (unknowns, Δλ)
+    let mut previous: Option<(Vec<f64>, f64)> = None;
+    let mut cuts = 0;
+    // a path that never reaches its end (it turns back for good) stops after this many
+    let limit = 50 * steps.max(1);
+    let mut done = 0;
+    while along(d) < s.target * (1.0 - 1e-9) && done < limit {
+        let prev = previous.as_ref().map(|(q, l)| (q.as_slice(), *l));
+        match d.arc_step(base, &s.p, lam, dl, prev)? {
+            Ok((trial, dlam)) => {
+                let fe: Vec<f64> = base
+                    .iter()
+                    .zip(&s.p)
+                    .map(|(b, q)| b + (lam + dlam) * q)
+                    .collect();
+                let mut reaction = d.reaction(push.block, &trial.f_int, &fe);
+                let dq = trial.dq.clone();
+                d.commit(trial, &dq, &vec![[0.0; 2]; d.cur.blocks.len()]);
+                lam += dlam;
+                reaction[0] += lam * s.dir[0];
+                reaction[1] += lam * s.dir[1];
+                let fraction = along(d) / s.target;
+                d.converged(fraction);
+                let pt = d.push_point(push.block, fraction, Some(reaction));
+                d.push_curve.push(pt);
+                previous = Some((dq, dlam));
+                if lam < 0.0 {
+                    d.pins.clear();
+                    return Ok((
+                        along(d) / s.target,
+                        Some(
+                            "the path turned back: the force on the pushed block changed sign"
+                                .into(),
+                        ),
+                    ));
+                }
+                done += 1;
+                cuts = 0;
+                if d.report.iterations <= d.settings.max_iterations / 10 {
+                    dl = (2.0 * dl).min(dl_max);
+                }
+            }
+            Err(why) => {
+                if cuts >= d.settings.max_cuts {
+                    let why = match why {
+                        StepFailure::NoConvergence(r) => format!("the out-of-balance force stays at {r:.2e} of the load along the arc"),
+                        StepFailure::Divergence => "the displacements grow without bound along the arc: the blocks move without restraint".to_string(),
+                    };
+                    d.pins.clear();
+                    return Ok((along(d) / s.target, Some(why)));
+                }
+                cuts += 1;
+                dl *= 0.5;
+            }
+        }
+    }
+    d.pins.clear();
+    let reached = along(d) / s.target;
+    if reached < 1.0 - 1e-9 {
+        return Ok((
+            reached,
+            Some(format!(
+                "the path did not reach the end of the push in {limit} increments"
+            )),
+        ));
+    }
+    Ok((1.0, None))
+}

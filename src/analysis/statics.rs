@@ -474,6 +474,15 @@ impl<'a> Driver<'a> {
     /// singular (a mechanism in the current contact states).
     /// `states`: the contact states the matrix is built in (the trial's, or at the first
     /// iteration of an increment those of the last converged one).
+    ///
+    /// The matrix is assembled on the geometry of the last converged increment, not the
+    /// trial's: the out-of-balance force, which decides convergence, is always that of the
+    /// trial geometry (the updated Lagrangian scheme of METHOD.md §4), so the converged
+    /// state is the same, while the iteration matrix stays fixed within an increment but
+    /// for the contacts that change state. An iteration in which no contact changed then
+    /// finds the matrix bit-identical and skips the factorization (only a solve), and one
+    /// in which a few changed is a low-rank change of the held factorization, which
+    /// [`Driver::reuse`] exploits.
     fn correction(
         &mut self,
         trial: &Trial,
@@ -488,7 +497,7 @@ impl<'a> Driver<'a> {
                 let newton = self.settings.strategy == Strategy::Newton || tangent;
                 let local = self.local_stiffness(trial, states, newton);
                 self.system
-                    .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+                    .stiffness_into(&self.cur, &local, &mut self.kbuf);
                 Self::pin_rows(&self.pins, &mut self.kbuf);
                 if !newton {
                     if let Some(x) = self.reuse(states, r) {
@@ -549,14 +558,15 @@ impl<'a> Driver<'a> {
             .unwrap_or_else(|| vec![0.0; r.len()]))
     }
 
-    /// Solve (K_s + ε K₀) x = r in the trial configuration.
+    /// Solve (K_s + ε K₀) x = r, both in the configuration of the last converged
+    /// increment (as every iteration matrix: see [`Driver::correction`]).
     fn blended_step(&mut self, trial: &Trial, r: &[f64], eps: f64) -> Result<Option<Vec<f64>>> {
         let elastic = self.elastic_local();
         let mut k0 = CsrMatrix::zeros(self.system.plan.pattern().clone());
-        self.system.stiffness_into(&trial.mesh, &elastic, &mut k0);
+        self.system.stiffness_into(&self.cur, &elastic, &mut k0);
         let local = self.local_stiffness(trial, &trial.state, false);
         self.system
-            .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+            .stiffness_into(&self.cur, &local, &mut self.kbuf);
         for (a, b) in self.kbuf.values.iter_mut().zip(&k0.values) {
             *a += eps * b;
         }
@@ -732,7 +742,7 @@ impl<'a> Driver<'a> {
                 // take the secant step instead
                 let local = self.local_stiffness(&trial, &trial.state, false);
                 self.system
-                    .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+                    .stiffness_into(&self.cur, &local, &mut self.kbuf);
                 Self::pin_rows(&self.pins, &mut self.kbuf);
                 let mut x = r.clone();
                 let ok = self.backend.factorize(&self.kbuf).is_ok()

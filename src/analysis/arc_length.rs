@@ -224,7 +224,7 @@ impl Driver<'_> {
                 && x2.iter().all(|v| v.abs() < 1e3 * size);
             return Ok(ok.then_some((x1, x2)));
         }
-        let local = self.local_stiffness(trial, false);
+        let local = self.local_stiffness(trial, &trial.state, false);
         self.system
             .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
         Self::pin_rows(&self.pins, &mut self.kbuf);

@@ -127,6 +127,89 @@ fn correlation(p: &[[f64; 2]]) -> f64 {
     sxy / (sxx * syy).sqrt()
 }
 
+/// The failure pattern at the end of a run: the open contacts inside the wall (not on
+/// the bed joints to the base and the beam), the x–y correlation of their midpoints
+/// (negative: a band falling from the top left to the bottom right, the diagonal
+/// stepped crack), how many of them are brick cracks, the largest compression (Pa,
+/// negative) at the bottom-right and top-left toes, and the open fraction of the length
+/// of the bed joints to the base and to the beam (rocking opens most of them at the
+/// heels).
+struct Pattern {
+    open: usize,
+    rho: f64,
+    through_bricks: usize,
+    bottom_right: f64,
+    top_left: f64,
+    bed_open: [f64; 2],
+}
+
+fn pattern(sc: &Scene, mesh: &Mesh, out: &Outcome) -> Pattern {
+    let cs = contacts(sc, mesh, out);
+    let t = sc.model.thickness;
+    let is_open = |s: &dfem::material::ContactState| *s == dfem::material::ContactState::Open;
+    let open: Vec<[f64; 2]> = cs
+        .iter()
+        .zip(&out.contact_states)
+        .filter(|((p, _), s)| is_open(s) && p[1] > 0.07 && p[1] < 0.92)
+        .map(|((p, _), _)| *p)
+        .collect();
+    let through_bricks = cs
+        .iter()
+        .zip(&out.contact_states)
+        .filter(|((_, j), s)| j == "brick" && is_open(s))
+        .count();
+    let stress = |k: usize| {
+        let c = &mesh.contacts[k];
+        out.contact_forces[k][0] / (c.length * t)
+    };
+    let toe = |x0: f64, x1: f64, y0: f64, y1: f64| {
+        (0..cs.len())
+            .filter(|&k| {
+                let p = cs[k].0;
+                p[0] >= x0 && p[0] <= x1 && p[1] >= y0 && p[1] <= y1
+            })
+            .map(stress)
+            .fold(0.0f64, f64::min)
+    };
+    // the bed joints to the base (y = 0) and to the beam (y = 0.992 m)
+    let bed_open = [0.0, 0.992].map(|y: f64| {
+        let on = |k: &usize| (cs[*k].0[1] - y).abs() < 1e-3;
+        let total: f64 = (0..cs.len())
+            .filter(on)
+            .map(|k| mesh.contacts[k].length)
+            .sum();
+        let opened: f64 = (0..cs.len())
+            .filter(on)
+            .filter(|&k| is_open(&out.contact_states[k]))
+            .map(|k| mesh.contacts[k].length)
+            .sum();
+        opened / total.max(1e-300)
+    });
+    let p = Pattern {
+        bed_open,
+        open: open.len(),
+        rho: if open.len() > 1 {
+            correlation(&open)
+        } else {
+            0.0
+        },
+        through_bricks,
+        bottom_right: toe(0.8, 1.0, -0.01, 0.07),
+        top_left: toe(-0.01, 0.2, 0.92, 1.0),
+    };
+    eprintln!(
+        "{} open contacts inside, x–y correlation {:.2}; {} open brick cracks; toes {:.2} and {:.2} MPa; bed joints to the base and the beam {:.0} % and {:.0} % open",
+        p.open,
+        p.rho,
+        p.through_bricks,
+        p.bottom_right / 1e6,
+        p.top_left / 1e6,
+        100.0 * p.bed_open[0],
+        100.0 * p.bed_open[1]
+    );
+    p
+}
+
 #[test]
 fn eindhoven_j4d_peak_and_failure_pattern() {
     let sc = wall("eindhoven", Some(0.052), 1.5e-3, 30, false);
@@ -177,43 +260,14 @@ fn eindhoven_j4d_peak_and_failure_pattern() {
     // joints to the base and the beam) form a band from the top left to the bottom
     // right (the diagonal stepped crack across joints and bricks), and the toes (bottom
     // right, top left) are on the compression cap (|σ| ≥ fₘ/3 where it starts to yield)
-    let cs = contacts(&sc, &mesh, &out);
-    let t = sc.model.thickness;
-    let open: Vec<[f64; 2]> = cs
-        .iter()
-        .zip(&out.contact_states)
-        .filter(|((p, _), s)| {
-            **s == dfem::material::ContactState::Open && p[1] > 0.07 && p[1] < 0.92
-        })
-        .map(|((p, _), _)| *p)
-        .collect();
-    let rho = correlation(&open);
-    let through_bricks = cs
-        .iter()
-        .zip(&out.contact_states)
-        .filter(|((_, j), s)| j == "brick" && **s == dfem::material::ContactState::Open)
-        .count();
-    let stress = |k: usize| {
-        let c = &mesh.contacts[k];
-        out.contact_forces[k][0] / (c.length * t)
-    };
-    let toe = |x0: f64, x1: f64, y0: f64, y1: f64| {
-        (0..cs.len())
-            .filter(|&k| {
-                let p = cs[k].0;
-                p[0] >= x0 && p[0] <= x1 && p[1] >= y0 && p[1] <= y1
-            })
-            .map(stress)
-            .fold(0.0f64, f64::min)
-    };
-    let (bottom_right, top_left) = (toe(0.8, 1.0, -0.01, 0.07), toe(-0.01, 0.2, 0.92, 1.0));
-    eprintln!(
-        "{} open contacts inside, x–y correlation {rho:.2}; {through_bricks} open brick cracks; toes {:.2} and {:.2} MPa",
-        open.len(),
-        bottom_right / 1e6,
-        top_left / 1e6
-    );
-    assert!(open.len() >= 10, "{} open contacts", open.len());
+    let Pattern {
+        open,
+        rho,
+        bottom_right,
+        top_left,
+        ..
+    } = pattern(&sc, &mesh, &out);
+    assert!(open >= 10, "{open} open contacts");
     assert!(
         rho < -0.5,
         "the open contacts do not form a falling diagonal: {rho}"
@@ -249,7 +303,9 @@ fn eindhoven_walls_sweep_table_and_figure() {
     for (name, meshes) in cases {
         for &m in meshes {
             let sc = wall(name, Some(m), 4e-3, 80, true);
-            let (_, out) = common::solve(&sc);
+            let (mesh, out) = common::solve(&sc);
+            eprint!("{name} at {m} m, at the end: ");
+            pattern(&sc, &mesh, &out);
             let pts = curve(&out);
             let (ip, peak) = first_peak(&pts);
             let last = pts.last().unwrap();

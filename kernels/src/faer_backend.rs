@@ -92,7 +92,7 @@ impl CholAnalysis {
     }
 
     /// Original index of permuted index `p`.
-    fn original(&self, p: usize) -> usize {
+    pub(crate) fn original(&self, p: usize) -> usize {
         match self.symbolic.perm() {
             Some(perm) => perm.arrays().0[p] as usize,
             None => p,
@@ -100,7 +100,7 @@ impl CholAnalysis {
     }
 
     /// Diagonal of the stored factor, in permuted order: L_pp for LLᵀ, D_pp for LDLᵀ.
-    fn factor_diagonal(&self) -> Vec<f64> {
+    pub(crate) fn factor_diagonal(&self) -> Vec<f64> {
         let n = self.pattern.n();
         let mut d = vec![0.0; n];
         match self.symbolic.raw() {
@@ -178,11 +178,13 @@ pub(crate) struct CholeskyCore {
 }
 
 impl CholeskyCore {
-    /// An LLᵀ core with a given permutation, always supernodal, sequential.
-    pub(crate) fn llt_with_perm(fwd: Vec<u32>, inv: Vec<u32>) -> Self {
+    /// An LLᵀ core with a given permutation, always supernodal, its numeric
+    /// factorization on `Par::rayon(threads)` (1 = sequential).
+    pub(crate) fn llt_with_perm(fwd: Vec<u32>, inv: Vec<u32>, threads: usize) -> Self {
         let mut c = Self::new(Kind::Llt);
         c.custom_perm = Some((fwd, inv));
         c.supernodal_threshold = 0.0;
+        c.threads = threads.max(1);
         c
     }
 

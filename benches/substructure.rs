@@ -68,8 +68,33 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
+/// CPU time (user + system) of this process so far, s (`/proc/self/stat`, in units of
+/// Linux's USER_HZ = 1/100 s); NaN where unavailable. On a loaded machine the wall times
+/// include waits for a core, the CPU times only the work done.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let fields: Vec<&str> = stat
+        .rsplit_once(')')
+        .map_or(Vec::new(), |(_, r)| r.split_whitespace().collect());
+    // after the command: state is field 3, utime 14 and stime 15 (1-based, man proc)
+    let tick = |k: usize| fields.get(k - 3).and_then(|v| v.parse::<f64>().ok());
+    match (tick(14), tick(15)) {
+        (Some(u), Some(s)) => (u + s) / 100.0,
+        _ => f64::NAN,
+    }
+}
+
+/// Wall and CPU time of `f`, s.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64, f64) {
+    let (t, c) = (Instant::now(), cpu_seconds());
+    let r = f();
+    (r, t.elapsed().as_secs_f64(), cpu_seconds() - c)
+}
+
 struct Timed {
     analysis: f64,
+    /// Median CPU time of a refactorization, s.
+    refactor_cpu: f64,
     first: f64,
     refactor: f64,
     best: f64,
@@ -85,14 +110,13 @@ fn time_backend(be: &mut dyn LinearBackend, k: &CsrMatrix, f: &[f64], reps: usiz
     let t = Instant::now();
     be.factorize(k).expect("factorization");
     let first = t.elapsed().as_secs_f64();
-    let mut times: Vec<f64> = (1..=reps)
+    let (mut times, mut cpu): (Vec<f64>, Vec<f64>) = (1..=reps)
         .map(|r| {
             let a = scaled(k, r);
-            let t = Instant::now();
-            be.factorize(&a).expect("refactorization");
-            t.elapsed().as_secs_f64()
+            let (_, wall, cpu) = timed(|| be.factorize(&a).expect("refactorization"));
+            (wall, cpu)
         })
-        .collect();
+        .unzip();
     be.factorize(k).expect("factorization");
     let mut x = f.to_vec();
     let t = Instant::now();
@@ -103,6 +127,7 @@ fn time_backend(be: &mut dyn LinearBackend, k: &CsrMatrix, f: &[f64], reps: usiz
         analysis,
         first,
         refactor: median(&mut times),
+        refactor_cpu: median(&mut cpu),
         best,
         solve,
         x,
@@ -143,21 +168,46 @@ fn main() {
     let mut faer = FaerCholesky::new();
     let base = time_backend(&mut faer, &k, &f, reps);
     let base_mb = faer.stats().factor_nnz as f64 * 8.0 / 1e6;
-    println!("| backend | subdomains | threads | interface unknowns | analysis (s) | first factorization (s) | refactorization, median (s) | best (s) | solve (s) | speed-up: faer-cholesky / (refactorization + solve) | interface fronts (Γ, B) | sparse factorizations, Σ (s) | Schur complements, Σ (s) | interface fronts, Σ (s) | factor entries (M) | factor memory (MB) | rel. difference to faer-cholesky |");
+    println!("| backend | subdomains | threads | interface unknowns | analysis (s) | first factorization (s) | refactorization, median (s) | best (s) | CPU time of a refactorization, median (s) | solve (s) | speed-up: faer-cholesky / (refactorization + solve) | interface fronts (Γ, B) | sparse factorizations, Σ (s) | Schur complements, Σ (s) | interface fronts, Σ (s) | factor entries (M) | factor memory (MB) | work (G multiply-adds) | critical path (G) | work-bound speed-up | rel. difference to faer-cholesky |");
     println!(
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     println!(
-        "| faer-cholesky (AMD) | 1 | 1 | 0 | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | 1.00 | | | | | {:.1} | {:.0} | 0 |",
+        "| faer-cholesky (AMD) | 1 | 1 | 0 | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | 1.00 | | | | | {:.1} | {:.0} | {:.1} | {:.1} | 1.00 | 0 |",
         base.analysis,
         base.first,
         base.refactor,
         base.best,
+        base.refactor_cpu,
         base.solve,
         faer.stats().factor_nnz as f64 / 1e6,
-        base_mb
+        base_mb,
+        faer.stats().factor_flops / 1e9,
+        faer.stats().factor_flops / 1e9,
     );
+    let base_flops = faer.stats().factor_flops;
     let base_total = base.refactor + base.solve;
+    // the same whole factorization with METIS nested dissection: what the ordering alone gives
+    let mut metis = FaerCholesky::new().with_ordering(FillOrdering::Metis);
+    let r = time_backend(&mut metis, &k, &f, reps);
+    let st = metis.stats();
+    println!(
+        "| faer-cholesky-metis | 1 | 1 | 0 | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | {:.2} | | | | | {:.1} | {:.0} | {:.1} | {:.1} | {:.2} | {:.1e} |",
+        r.analysis,
+        r.first,
+        r.refactor,
+        r.best,
+        r.refactor_cpu,
+        r.solve,
+        base_total / (r.refactor + r.solve),
+        st.factor_nnz as f64 / 1e6,
+        st.factor_nnz as f64 * 8.0 / 1e6,
+        st.factor_flops / 1e9,
+        st.factor_flops / 1e9,
+        base_flops / st.factor_flops,
+        max_relative_difference(&r.x, &base.x)
+    );
+    drop(metis);
     let mut reuse_rows = Vec::new();
     for &kp in &parts {
         let part = block_partition(&m, kp).expect("block partition");
@@ -176,12 +226,13 @@ fn main() {
                 let ss = be.substructure_stats().clone();
                 let nf = (reps + 2) as f64;
                 println!(
-                    "| faer-substructured | {kp} | {nt} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {} | {:.3} | {:.3} | {:.3} | {:.1} | {:.0} | {:.1e} |",
+                    "| faer-substructured | {kp} | {nt} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | {:.2} | {} | {:.3} | {:.3} | {:.3} | {:.1} | {:.0} | {:.1} | {:.1} | {:.2} | {:.1e} |",
                     ss.interface_size,
                     r.analysis,
                     r.first,
                     r.refactor,
                     r.best,
+                    r.refactor_cpu,
                     r.solve,
                     base_total / (r.refactor + r.solve),
                     ss.front_sizes
@@ -194,6 +245,10 @@ fn main() {
                     ss.interface_seconds / nf,
                     be.stats().factor_nnz as f64 / 1e6,
                     be.stats().memory_bytes as f64 / 1e6,
+                    be.stats().factor_flops / 1e9,
+                    ss.critical_path_flops / 1e9,
+                    base_flops
+                        / (be.stats().factor_flops / nt as f64).max(ss.critical_path_flops),
                     max_relative_difference(&r.x, &base.x)
                 );
                 if kp < 2 {
@@ -225,14 +280,16 @@ fn main() {
                 let k2 = system.stiffness(&m, &opened);
                 let mut times = Vec::new();
                 let before = be.substructure_stats().subdomain_factorizations;
+                let mut cpu = Vec::new();
                 for r in 0..2 * reps {
                     let a = if r % 2 == 0 { &k2 } else { &k };
-                    let t = Instant::now();
-                    be.factorize(a).expect("refactorization");
-                    times.push(t.elapsed().as_secs_f64());
+                    let (_, wall, c) = timed(|| be.factorize(a).expect("refactorization"));
+                    times.push(wall);
+                    cpu.push(c);
                 }
                 let refactored = be.substructure_stats().subdomain_factorizations - before;
                 let fronts = be.substructure_stats().last_fronts;
+                let work = be.substructure_stats().last_flops;
                 be.factorize(&k2).expect("factorization");
                 let mut x = f.clone();
                 be.solve(&mut x).expect("solve");
@@ -240,8 +297,9 @@ fn main() {
                 faer.factorize(&k2).expect("faer");
                 faer.solve(&mut xf).expect("faer");
                 let t_one = median(&mut times);
+                let c_one = median(&mut cpu);
                 reuse_rows.push(format!(
-                    "| {kp} | {nt} | {} | {:.2} | {fronts} | {} | {:.3} | {:.3} | {:.0} % | {:.3} | {:.0} % | {:.1e} |",
+                    "| {kp} | {nt} | {} | {:.2} | {fronts} | {} | {:.3} | {:.3} | {:.0} % | {:.3} | {:.0} % | {:.0} % | {:.0} % | {:.1} | {:.0} % | {:.0} % | {:.1e} |",
                     inside.len().div_ceil(20),
                     refactored as f64 / (2 * reps) as f64,
                     ss.interface_size,
@@ -250,6 +308,11 @@ fn main() {
                     100.0 * t_one / r.refactor,
                     base.refactor,
                     100.0 * t_one / base.refactor,
+                    100.0 * c_one / r.refactor_cpu,
+                    100.0 * c_one / base.refactor_cpu,
+                    work / 1e9,
+                    100.0 * work / be.stats().factor_flops,
+                    100.0 * work / base_flops,
                     max_relative_difference(&x, &xf)
                 ));
             });
@@ -258,8 +321,10 @@ fn main() {
     println!(
         "\nOne subdomain changed (a secant iteration in which contacts of subdomain 0 open):\n"
     );
-    println!("| subdomains | threads | contacts changed | subdomains refactorized per factorization | fronts recomputed | interface unknowns | factorization, median (s) | full refactorization, same backend (s) | ratio | faer-cholesky refactorization (s) | ratio | rel. difference to faer-cholesky |");
-    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("| subdomains | threads | contacts changed | subdomains refactorized per factorization | fronts recomputed | interface unknowns | factorization, median (s) | full refactorization, same backend (s) | ratio | faer-cholesky refactorization (s) | ratio | CPU-time ratio to the full refactorization | CPU-time ratio to faer-cholesky | work recomputed (G multiply-adds) | work ratio to the full refactorization | work ratio to faer-cholesky | rel. difference to faer-cholesky |");
+    println!(
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
     for r in reuse_rows {
         println!("{r}");
     }

@@ -76,6 +76,11 @@ pub struct SolverStats {
     pub min_pivot_ratio: f64,
     /// Unknown (original numbering) where `min_pivot_ratio` was reached.
     pub min_pivot_index: usize,
+    /// Multiply-adds of one numeric factorization with the last analysis, from its symbolic
+    /// structure (Σ over the columns of L of m(m + 1)/2, m the column's entries, plus the
+    /// dense work of a substructured backend); 0 when the backend does not report it. A
+    /// measure of work that does not depend on the machine's load.
+    pub factor_flops: f64,
     /// Memory held by the factor or preconditioner of the last factorization, bytes, as
     /// reported by the backend; 0 when it does not report it (then see `factor_nnz`).
     pub memory_bytes: usize,

@@ -99,6 +99,32 @@ impl CholAnalysis {
         }
     }
 
+    /// Multiply-adds of a numeric factorization: Σ over the columns of L of m(m + 1)/2,
+    /// m the column's stored entries (the diagonal included).
+    pub(crate) fn flops(&self) -> f64 {
+        let col = |m: usize| (m * (m + 1) / 2) as f64;
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => s
+                .col_ptr()
+                .windows(2)
+                .map(|w| col((w[1] - w[0]) as usize))
+                .sum(),
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let begin = s.supernode_begin();
+                let end = s.supernode_end();
+                // the values of supernode k: a (c + p) × c block, p rows below it
+                let vals = s.col_ptr_for_val();
+                (0..s.n_supernodes())
+                    .map(|k| {
+                        let c = (end[k] - begin[k]) as usize;
+                        let p = (vals[k + 1] - vals[k]) as usize / c.max(1) - c;
+                        (0..c).map(|j| col(c - j + p)).sum::<f64>()
+                    })
+                    .sum()
+            }
+        }
+    }
+
     /// Diagonal of the stored factor, in permuted order: L_pp for LLᵀ, D_pp for LDLᵀ.
     pub(crate) fn factor_diagonal(&self) -> Vec<f64> {
         let n = self.pattern.n();
@@ -283,7 +309,7 @@ impl CholeskyCore {
             advise_huge_pages(&mut l_values);
         }
         self.stats.factor_nnz = l_values.len();
-        self.analysis = Some(CholAnalysis {
+        let analysis = CholAnalysis {
             pattern: pattern.clone(),
             col_ptr,
             symbolic,
@@ -292,7 +318,9 @@ impl CholeskyCore {
             diag_pos: pattern.diagonal_positions(),
             factored: false,
             last_values: Vec::new(),
-        });
+        };
+        self.stats.factor_flops = analysis.flops();
+        self.analysis = Some(analysis);
         self.stats.symbolic_factorizations += 1;
         self.stats.symbolic_seconds += t.elapsed().as_secs_f64();
         Ok(())

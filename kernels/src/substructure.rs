@@ -80,6 +80,16 @@ pub struct SubstructureStats {
     pub subdomain_interface_sizes: Vec<usize>,
     /// (|Γ|, |B|) of each interface front, depth first (root last), last analysis.
     pub front_sizes: Vec<(usize, usize)>,
+    /// Multiply-adds of each subdomain's refactorization (sparse factorization of Kᵢ and
+    /// the product L_BB L_BBᵀ of its Schur complement), last analysis.
+    pub subdomain_flops: Vec<f64>,
+    /// Multiply-adds of each front (partial Cholesky: |Γ|³/6 + |B| |Γ|²/2 + |B|² |Γ|/2),
+    /// in the order of `front_sizes`.
+    pub front_flops: Vec<f64>,
+    /// Multiply-adds on the longest chain of work that cannot run in parallel (a leaf and
+    /// the fronts above it, the more expensive subtree at each front): with as many cores
+    /// as subdomains, a factorization takes at least this much work's time.
+    pub critical_path_flops: f64,
     /// Numeric factorizations of subdomains (each subdomain counts once per factorization).
     pub subdomain_factorizations: usize,
     /// Subdomains kept (factor and Schur complement reused) at a factorization.
@@ -89,6 +99,9 @@ pub struct SubstructureStats {
     pub last_refactorized: Vec<usize>,
     /// Fronts recomputed by the last numeric factorization.
     pub last_fronts: usize,
+    /// Multiply-adds of what the last numeric factorization recomputed (subdomains and
+    /// fronts), the load-independent measure of its work.
+    pub last_flops: f64,
     /// Sparse factorizations of the subdomains, summed over subdomains (thread time), s.
     pub subdomain_factor_seconds: f64,
     /// Schur complements of the subdomains (trailing block and its product), summed, s.
@@ -347,6 +360,21 @@ impl Node {
         }
     }
 
+    /// See [`SubstructureStats::critical_path_flops`].
+    fn critical_path_flops(&self) -> f64 {
+        match &self.kind {
+            Kind::Leaf(l) => l.flops(),
+            Kind::Front(f) => {
+                let below = f
+                    .children
+                    .iter()
+                    .map(Node::critical_path_flops)
+                    .fold(0.0, f64::max);
+                below + front_flops(f.own.len(), self.bnd.len())
+            }
+        }
+    }
+
     fn memory_bytes(&self) -> usize {
         let own = 8 * self.c.nrows() * self.c.ncols();
         own + match &self.kind {
@@ -367,12 +395,26 @@ impl Node {
     }
 }
 
+/// Multiply-adds of a front's partial Cholesky with |Γ| = o, |B| = b: the Cholesky of
+/// M_ΓΓ (o³/6), X = M_BΓ L⁻ᵀ (b o²/2) and the lower half of X Xᵀ (b² o/2).
+fn front_flops(o: usize, b: usize) -> f64 {
+    let (o, b) = (o as f64, b as f64);
+    o * o * o / 6.0 + b * o * o / 2.0 + b * b * o / 2.0
+}
+
 fn col_mut(v: &mut [f64]) -> MatMut<'_, f64> {
     let n = v.len();
     MatMut::from_column_major_slice_mut(v, n, 1)
 }
 
 impl Leaf {
+    /// Multiply-adds of a refactorization: the sparse factor of Kᵢ and the lower half of
+    /// L_BB L_BBᵀ (|B|³/6).
+    fn flops(&self) -> f64 {
+        let nb = (self.half.dofs.len() - self.half.n_int) as f64;
+        self.half.core.analysis.as_ref().map_or(0.0, |a| a.flops()) + nb * nb * nb / 6.0
+    }
+
     /// Sparse factorization of Kᵢ and its Schur complement Cᵢ (lower, Bᵢ order), with
     /// the smallest interior pivot ratio.
     fn refactorize(&mut self, cx: Ctx<'_>) -> Result<(Mat<f64>, (f64, usize)), SolveError> {
@@ -874,8 +916,10 @@ impl LinearBackend for FaerCholeskySubstructured {
         let ss = &mut self.sub_stats;
         let mut leaves = Vec::new();
         let mut fronts = Vec::new();
+        let mut leaf_flops = Vec::new();
         an.root.visit(
             &mut |l| {
+                leaf_flops.push(l.flops());
                 let nnz = l
                     .half
                     .core
@@ -900,6 +944,15 @@ impl LinearBackend for FaerCholeskySubstructured {
                 .map(|&(o, b)| o * (o + 1) / 2 + o * b)
                 .sum::<usize>();
         let ordering_seconds = partition_seconds + leaves.iter().map(|l| l.3).sum::<f64>();
+        ss.front_flops = ss
+            .front_sizes
+            .iter()
+            .map(|&(o, b)| front_flops(o, b))
+            .collect();
+        ss.subdomain_flops = leaf_flops;
+        ss.critical_path_flops = an.root.critical_path_flops();
+        self.stats.factor_flops =
+            ss.subdomain_flops.iter().sum::<f64>() + ss.front_flops.iter().sum::<f64>();
         ss.subdomains = ss.subdomain_sizes.len();
         ss.interface_size = ss.front_sizes.iter().map(|f| f.0).sum();
         self.stats.factor_nnz = nnz;
@@ -940,14 +993,18 @@ impl LinearBackend for FaerCholeskySubstructured {
         // counters: which subdomains were redone (their times are this call's)
         let mut leaves = Vec::new();
         let mut fronts = Vec::new();
-        an.root.visit(&mut |l| leaves.push(l.times), &mut |f, _| {
-            fronts.push(f.time)
-        });
+        an.root
+            .visit(&mut |l| leaves.push((l.times, l.flops())), &mut |f, bnd| {
+                fronts.push((f.time, front_flops(f.own.len(), bnd.len())))
+            });
         let ss = &mut self.sub_stats;
         ss.last_refactorized.clear();
-        for (i, &(tf, ts)) in leaves.iter().enumerate() {
+        ss.last_fronts = 0;
+        ss.last_flops = 0.0;
+        for (i, &((tf, ts), flops)) in leaves.iter().enumerate() {
             if tf >= 0.0 {
                 ss.last_refactorized.push(i);
+                ss.last_flops += flops;
                 ss.subdomain_factorizations += 1;
                 ss.subdomain_factor_seconds += tf;
                 ss.schur_seconds += ts;
@@ -955,8 +1012,11 @@ impl LinearBackend for FaerCholeskySubstructured {
                 ss.subdomain_reuses += 1;
             }
         }
-        ss.last_fronts = fronts.iter().filter(|&&t| t >= 0.0).count();
-        ss.interface_seconds += fronts.iter().filter(|&&t| t >= 0.0).sum::<f64>();
+        for &(t, flops) in fronts.iter().filter(|f| f.0 >= 0.0) {
+            ss.last_fronts += 1;
+            ss.interface_seconds += t;
+            ss.last_flops += flops;
+        }
         mark_counted(&mut an.root);
         let (ratio, index) = an.root.min_pivot;
         self.stats.min_pivot_ratio = if a.pattern.n() == 0 { f64::NAN } else { ratio };

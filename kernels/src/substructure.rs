@@ -102,7 +102,8 @@ pub struct SubstructureStats {
     /// Multiply-adds of what the last numeric factorization recomputed (subdomains and
     /// fronts), the load-independent measure of its work.
     pub last_flops: f64,
-    /// Sparse factorizations of the subdomains, summed over subdomains (thread time), s.
+    /// Sparse factorizations of the subdomains, summed over subdomains (wall time inside
+    /// each task), s.
     pub subdomain_factor_seconds: f64,
     /// Schur complements of the subdomains (trailing block and its product), summed, s.
     pub schur_seconds: f64,
@@ -119,7 +120,8 @@ struct Leaf {
     lss: Mat<f64>,
     /// Interior solution of the last backward solve (interior order).
     x: Vec<f64>,
-    /// Thread time of the last refactorization: sparse factorization, Schur complement.
+    /// Wall time (inside its task) of the last refactorization, s: sparse factorization,
+    /// Schur complement; negative once counted in the statistics.
     times: (f64, f64),
 }
 
@@ -138,7 +140,8 @@ struct Front {
     m: Mat<f64>,
     /// y_Γ of the last forward solve, then x_Γ of the backward solve.
     y: Vec<f64>,
-    /// Thread time of the last recomputation, s.
+    /// Wall time (inside its task) of the last recomputation, s; negative once counted in
+    /// the statistics.
     time: f64,
 }
 

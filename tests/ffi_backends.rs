@@ -20,10 +20,7 @@ fn capacity_of_the_wall_is_the_same_on_every_backend() {
     let (_, reference) = common::solve(&sc);
     let lambda = reference.load_factor.expect("a capacity run gives λ");
     assert!(lambda > 0.0);
-    // mumps-spd (SYM = 1) is left out: MUMPS runs no null-pivot detection without pivoting,
-    // so the near-singular secant matrices past the collapse load are not recognized and
-    // the run continues beyond faer's λ (measured: 0.509 against 0.4695).
-    for name in dfem_ffi::BACKENDS.iter().filter(|n| **n != "mumps-spd") {
+    for name in dfem_ffi::BACKENDS {
         let t0 = std::time::Instant::now();
         let (_, out) = common::solve_with(&sc, name);
         let l = out.load_factor.expect("a capacity run gives λ");
@@ -33,9 +30,13 @@ fn capacity_of_the_wall_is_the_same_on_every_backend() {
             out.stats.iterations,
             t0.elapsed().as_secs_f64()
         );
-        // TOLERANCE
+        // The capacity search brackets λ to a relative width of 1e-3 (`bracket`); near
+        // the collapse load the contact states at the end of an increment depend on the
+        // last digits of the solves (PETSc's CG stops at a relative residual of 1e-12), so
+        // two backends may end a bracket apart (measured: MUMPS and faer to the bit, PETSc
+        // 1.1e-3 below).
         assert!(
-            common::rel_err(l, lambda) <= 1e-6,
+            common::rel_err(l, lambda) <= 2e-3,
             "{name}: λ = {l}, faer {lambda}"
         );
         assert_eq!(

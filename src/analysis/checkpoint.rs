@@ -26,8 +26,9 @@ use std::path::Path;
 /// Name of the checkpoint file in the output directory.
 pub const FILE: &str = "checkpoint.bin";
 const MAGIC: &[u8; 8] = b"DFEMCKPT";
-/// Version of the format; a file of another version is refused.
-pub const VERSION: u32 = 3;
+/// Version of the format; a file of another version is refused. (4: the counters gained
+/// `tangent_fallbacks`.)
+pub const VERSION: u32 = 4;
 
 /// The state of a dynamic run after `step` completed time steps.
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -52,6 +52,9 @@ pub struct Stats {
     pub reused_factorizations: usize,
     /// Conjugate-gradient iterations of those corrections.
     pub reuse_iterations: usize,
+    /// Increments of the secant strategy that went on with tangent (Newton) steps after
+    /// the secant iterations stalled.
+    pub tangent_fallbacks: usize,
     /// Converged time steps of a dynamic run cut because a contact closed by more than
     /// the band thickness within the step (an impact the step could not resolve).
     pub impact_cuts: usize,

@@ -361,12 +361,19 @@ impl<'a> Driver<'a> {
         )
     }
 
-    fn local_stiffness(&self, trial: &Trial, newton: bool) -> Vec<LocalStiffness> {
+    /// The contacts' local stiffness matrices (N/m) in the given states; `newton` adds the
+    /// slip contacts' friction–normal coupling, with the sign of the shear force in `trial`.
+    fn local_stiffness(
+        &self,
+        trial: &Trial,
+        states: &[ContactState],
+        newton: bool,
+    ) -> Vec<LocalStiffness> {
         (0..self.area.len())
             .map(|k| {
                 let law = self.law.get(k);
                 let s = law.springs(self.area[k]);
-                match trial.state[k] {
+                match states[k] {
                     ContactState::Stick => [[s.kn, 0.0], [0.0, s.ks]],
                     ContactState::Open => [[0.0, 0.0], [0.0, 0.0]],
                     ContactState::Slip if newton => {
@@ -465,21 +472,38 @@ impl<'a> Driver<'a> {
 
     /// One correction δ = K⁻¹ r with the strategy's matrix; `None` when that matrix is
     /// singular (a mechanism in the current contact states).
-    fn correction(&mut self, trial: &Trial, r: &[f64], tangent: bool) -> Result<Option<Vec<f64>>> {
+    /// `states`: the contact states the matrix is built in (the trial's, or at the first
+    /// iteration of an increment those of the last converged one).
+    ///
+    /// The matrix is assembled on the geometry of the last converged increment, not the
+    /// trial's: the out-of-balance force, which decides convergence, is always that of the
+    /// trial geometry (the updated Lagrangian scheme of METHOD.md §4), so the converged
+    /// state is the same, while the iteration matrix stays fixed within an increment but
+    /// for the contacts that change state. An iteration in which no contact changed then
+    /// finds the matrix bit-identical and skips the factorization (only a solve), and one
+    /// in which a few changed is a low-rank change of the held factorization, which
+    /// [`Driver::reuse`] exploits.
+    fn correction(
+        &mut self,
+        trial: &Trial,
+        states: &[ContactState],
+        r: &[f64],
+        tangent: bool,
+    ) -> Result<Option<Vec<f64>>> {
         let mut x = r.to_vec();
         match self.settings.strategy {
             Strategy::Initial => Ok(self.solve_k0(&mut x)?.then_some(x)),
             Strategy::Secant | Strategy::Newton => {
                 let newton = self.settings.strategy == Strategy::Newton || tangent;
-                let local = self.local_stiffness(trial, newton);
+                let local = self.local_stiffness(trial, states, newton);
                 self.system
-                    .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+                    .stiffness_into(&self.cur, &local, &mut self.kbuf);
                 Self::pin_rows(&self.pins, &mut self.kbuf);
                 if !newton {
-                    if let Some(x) = self.reuse(trial, r) {
+                    if let Some(x) = self.reuse(states, r) {
                         return Ok(Some(x));
                     }
-                    self.held = Held::Secant(trial.state.clone());
+                    self.held = Held::Secant(states.to_vec());
                 }
                 let backend: &mut dyn LinearBackend = if newton {
                     if self.lu.is_none() {
@@ -505,15 +529,11 @@ impl<'a> Driver<'a> {
     /// The secant correction K_s⁻¹ r computed with the held secant factorization as a
     /// preconditioner, when few contacts changed state since it was computed (`kbuf` holds
     /// the new K_s). `None`: refactorize.
-    fn reuse(&mut self, trial: &Trial, r: &[f64]) -> Option<Vec<f64>> {
+    fn reuse(&mut self, now: &[ContactState], r: &[f64]) -> Option<Vec<f64>> {
         let Held::Secant(states) = &self.held else {
             return None;
         };
-        let changed = states
-            .iter()
-            .zip(&trial.state)
-            .filter(|(a, b)| a != b)
-            .count();
+        let changed = states.iter().zip(now).filter(|(a, b)| a != b).count();
         if changed > REUSE_MAX_CHANGES {
             return None;
         }
@@ -538,14 +558,15 @@ impl<'a> Driver<'a> {
             .unwrap_or_else(|| vec![0.0; r.len()]))
     }
 
-    /// Solve (K_s + ε K₀) x = r in the trial configuration.
+    /// Solve (K_s + ε K₀) x = r, both in the configuration of the last converged
+    /// increment (as every iteration matrix: see [`Driver::correction`]).
     fn blended_step(&mut self, trial: &Trial, r: &[f64], eps: f64) -> Result<Option<Vec<f64>>> {
         let elastic = self.elastic_local();
         let mut k0 = CsrMatrix::zeros(self.system.plan.pattern().clone());
-        self.system.stiffness_into(&trial.mesh, &elastic, &mut k0);
-        let local = self.local_stiffness(trial, false);
+        self.system.stiffness_into(&self.cur, &elastic, &mut k0);
+        let local = self.local_stiffness(trial, &trial.state, false);
         self.system
-            .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+            .stiffness_into(&self.cur, &local, &mut self.kbuf);
         for (a, b) in self.kbuf.values.iter_mut().zip(&k0.values) {
             *a += eps * b;
         }
@@ -563,17 +584,23 @@ impl<'a> Driver<'a> {
     }
 
     /// Iterate one increment to the external force `f_ext` and prescribed increments.
+    /// `guess`: where the iterations start (the last increment of the phase extrapolated),
+    /// or `None` to start from zero.
     fn increment(
         &mut self,
         f_ext: &[f64],
         presc: &[Point],
+        guess: Option<Vec<f64>>,
     ) -> Result<std::result::Result<Trial, (IncrementFailure, Failure)>> {
         let n = self.cur.n_dofs;
-        let mut dq = vec![0.0; n];
+        let extrapolated = guess.is_some();
+        let mut dq = guess.unwrap_or_else(|| vec![0.0; n]);
         for &(d, v) in &self.pins {
             dq[d] = v;
         }
-        if presc.iter().any(|p| *p != [0.0, 0.0]) || self.pins.iter().any(|p| p.1 != 0.0) {
+        if !extrapolated
+            && (presc.iter().any(|p| *p != [0.0, 0.0]) || self.pins.iter().any(|p| p.1 != 0.0))
+        {
             // elastic predictor of a prescribed motion: the free blocks' elastic response to
             // it, so that the iterations start near the answer rather than from the
             // friction limit of slipping contacts
@@ -607,6 +634,7 @@ impl<'a> Driver<'a> {
         // the best out-of-balance norm so far and the iteration that set it
         let mut best_rn = f64::INFINITY;
         let mut best_it = 0;
+        let mut tangent_only = false;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
             let r = self.out_of_balance(f_ext, &trial.f_int);
@@ -647,7 +675,7 @@ impl<'a> Driver<'a> {
                         && (trial.force[k][0].hypot(trial.force[k][1]) > negligible
                             || prev_force[k][0].hypot(prev_force[k][1]) > negligible)
                 });
-            if it > 0 && rn <= self.settings.tolerance * scale && !changed {
+            if (it > 0 || extrapolated) && rn <= self.settings.tolerance * scale && !changed {
                 self.report.iterations = it;
                 self.report.residual = rn / scale;
                 return Ok(Ok(trial));
@@ -656,8 +684,19 @@ impl<'a> Driver<'a> {
                 best_rn = rn;
                 best_it = it;
             } else if it - best_it >= STALL_ITERATIONS {
-                // stagnation: the load is beyond what the contacts can hold from here
-                break;
+                if self.settings.strategy == Strategy::Secant && !tangent_only {
+                    // the secant iterations stagnate, which on large walls they do below
+                    // the limit load, a little above the tolerance (docs/performance.md,
+                    // "60×60 and 100×100 walls"): go on with tangent steps, which take the
+                    // friction's dependence on the normal force into account, before
+                    // declaring the load beyond what the contacts can hold
+                    tangent_only = true;
+                    self.stats.tangent_fallbacks += 1;
+                    best_it = it;
+                } else {
+                    // stagnation: the load is beyond what the contacts can hold from here
+                    break;
+                }
             }
             prev_state = trial.state.clone();
             prev_force = trial.force.clone();
@@ -667,11 +706,28 @@ impl<'a> Driver<'a> {
             // secant iterations then contract by a constant factor, ~0.7 on the walls of
             // docs/performance.md; the tangent step closes them in one or two)
             let tangent = self.settings.strategy == Strategy::Newton
+                || tangent_only
                 || (self.settings.strategy == Strategy::Secant
                     && it > 1
                     && !changed
                     && trial.state.contains(&ContactState::Slip));
-            let delta = match self.correction(&trial, &r, tangent)? {
+            // the first correction of an increment is built in the states the last increment
+            // converged in: at dq = 0 every contact reports its committed force, which reads
+            // as sticking even where it was open or slipping, and an all-sticking (elastic)
+            // predictor overshoots where the joints had opened
+            let states =
+                if it == 0 && !extrapolated && self.committed.state.len() == trial.state.len() {
+                    self.committed.state.clone()
+                } else {
+                    trial.state.clone()
+                };
+            // a correction of the size of the model comes from a matrix singular but for
+            // round-off (whether the factorization flags it depends on the backend's pivot
+            // threshold): treated as singular, so that the backends agree
+            let correction = self
+                .correction(&trial, &states, &r, tangent)?
+                .filter(|d| d.iter().all(|v| v.abs() <= 0.5 * size));
+            let delta = match correction {
                 Some(d) => {
                     singular_streak = 0;
                     d
@@ -703,9 +759,9 @@ impl<'a> Driver<'a> {
                 // safeguarded Newton: where the tangent step does not reduce the
                 // out-of-balance force (slip/open cycling at a lightly loaded contact),
                 // take the secant step instead
-                let local = self.local_stiffness(&trial, false);
+                let local = self.local_stiffness(&trial, &trial.state, false);
                 self.system
-                    .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+                    .stiffness_into(&self.cur, &local, &mut self.kbuf);
                 Self::pin_rows(&self.pins, &mut self.kbuf);
                 let mut x = r.clone();
                 let ok = self.backend.factorize(&self.kbuf).is_ok()
@@ -856,6 +912,11 @@ impl<'a> Driver<'a> {
         let mut s = 0.0;
         let mut ds = 1.0 / steps as f64;
         let mut cuts = 0;
+        // the last converged increment of this phase (its step in the phase's factor and
+        // its unknowns' increment): the next one starts from it, scaled to its own step
+        // (a linear extrapolation of the path, which saves the first iterations of every
+        // increment of a proportional loading)
+        let mut last: Option<(f64, Vec<f64>)> = None;
         if !phase.pin_step.is_empty() || !self.pins.is_empty() {
             // the held factorizations were computed with other unknowns pinned
             self.held = Held::Nothing;
@@ -882,9 +943,18 @@ impl<'a> Driver<'a> {
                 .iter()
                 .map(|&(d, v)| (d, v * (target - s)))
                 .collect();
-            match self.increment(&f, &presc)? {
+            // (not under a prescribed motion, whose elastic predictor starts closer: a
+            // settlement or fault offset that slips joints changes its path every increment)
+            let guess = last
+                .as_ref()
+                .filter(|_| {
+                    phase.presc_step.iter().all(|p| *p == [0.0, 0.0]) && phase.pin_step.is_empty()
+                })
+                .map(|(step, dq)| dq.iter().map(|x| x * (target - s) / step).collect());
+            match self.increment(&f, &presc, guess)? {
                 Ok(trial) => {
                     let dq = trial.dq.clone();
+                    last = Some((target - s, dq.clone()));
                     let reaction = phase.record.map(|b| self.reaction(b, &trial.f_int, &f));
                     self.commit(trial, &dq, &presc);
                     s = target;
@@ -1205,6 +1275,9 @@ pub fn run_with_progress<'a>(
             let mut last_fail: Option<String> = None;
             let mut upper = f64::INFINITY;
             let limit = 1e3;
+            // the last converged increment (its step in λ and its unknowns' increment),
+            // extrapolated to start the next one (as in `run_phase`)
+            let mut last: Option<(f64, Vec<f64>)> = None;
             d.begin_phase("capacity", None, 1.0);
             let control = super::curve::control_block(mesh);
             let curve_point = |d: &Driver, lambda: f64, block: usize| super::curve::CurvePoint {
@@ -1242,10 +1315,14 @@ pub fn run_with_progress<'a>(
                     .zip(&f_lat)
                     .map(|(b, l)| b + dir * target * l)
                     .collect();
-                match d.increment(&f, &zero_presc)? {
+                let guess = last
+                    .as_ref()
+                    .map(|(step, dq)| dq.iter().map(|x| x * (target - lambda) / step).collect());
+                match d.increment(&f, &zero_presc, guess)? {
                     Ok(trial) => {
                         let dq = trial.dq.clone();
                         d.commit(trial, &dq, &zero_presc);
+                        last = Some((target - lambda, dq));
                         lambda = target;
                         d.converged(lambda);
                         if let Some(b) = control {

@@ -6,6 +6,13 @@
 //! * **slip** if |Fₛ| > c A_c − Fₙ tan φ: Fₛ is returned to ±(c A_c − Fₙ tan φ) with the
 //!   sign of the trial;
 //! * **stick** otherwise.
+//!
+//! The bond is brittle, as in UDEC's Coulomb slip joint: a contact that has once opened
+//! in tension or slipped has lost its tensile strength and its cohesion for good (its
+//! history variable, 0 intact, 1 broken), and from then on is a dry frictional contact.
+//! Without this a crack would carry fₜ A_c again in every increment after it opened
+//! (its committed force is zero, so the next trial starts from zero): a joint pulled
+//! open step by step would re-crack each step, and the answer would depend on the steps.
 
 use super::{ContactLaw, ContactSprings, ContactState, ElasticBand};
 use crate::scene::Joint;
@@ -33,24 +40,71 @@ impl MohrCoulomb {
     }
 }
 
-impl ContactLaw for MohrCoulomb {
-    fn springs(&self, area: f64) -> ContactSprings {
-        self.elastic.springs(area)
-    }
-
-    fn update(&self, area: f64, committed: [f64; 2], d: [f64; 2]) -> ([f64; 2], ContactState) {
+impl MohrCoulomb {
+    /// The return to the strength envelope with the given tensile strength (Pa) and
+    /// cohesion (Pa): forces (N) and state.
+    fn ret(
+        &self,
+        area: f64,
+        committed: [f64; 2],
+        d: [f64; 2],
+        ft: f64,
+        c: f64,
+    ) -> ([f64; 2], ContactState) {
         let k = self.springs(area);
         let fn_ = committed[0] + k.kn * d[0];
-        if fn_ > self.tensile_strength * area {
+        if fn_ > ft * area {
             return ([0.0, 0.0], ContactState::Open);
         }
         let fs = committed[1] + k.ks * d[1];
-        let limit = (self.cohesion * area - fn_ * self.tan_phi).max(0.0);
+        let limit = (c * area - fn_ * self.tan_phi).max(0.0);
         if fs.abs() > limit {
             ([fn_, limit.copysign(fs)], ContactState::Slip)
         } else {
             ([fn_, fs], ContactState::Stick)
         }
+    }
+}
+
+impl ContactLaw for MohrCoulomb {
+    fn springs(&self, area: f64) -> ContactSprings {
+        self.elastic.springs(area)
+    }
+
+    /// The intact law (history 0).
+    fn update(&self, area: f64, committed: [f64; 2], d: [f64; 2]) -> ([f64; 2], ContactState) {
+        self.update_history(area, committed, 0.0, d).map_two()
+    }
+
+    /// `history`: 0 while the bond is intact, 1 once it has broken (opened or slipped);
+    /// a broken contact has fₜ = c = 0.
+    fn update_history(
+        &self,
+        area: f64,
+        committed: [f64; 2],
+        history: f64,
+        d: [f64; 2],
+    ) -> ([f64; 2], ContactState, f64) {
+        let broken = history >= 0.5;
+        let (ft, c) = if broken {
+            (0.0, 0.0)
+        } else {
+            (self.tensile_strength, self.cohesion)
+        };
+        let (f, state) = self.ret(area, committed, d, ft, c);
+        let breaks = state != ContactState::Stick && (ft > 0.0 || c > 0.0);
+        (f, state, if broken || breaks { 1.0 } else { 0.0 })
+    }
+}
+
+/// The first two of a triple.
+trait MapTwo<A, B> {
+    fn map_two(self) -> (A, B);
+}
+
+impl<A, B, C> MapTwo<A, B> for (A, B, C) {
+    fn map_two(self) -> (A, B) {
+        (self.0, self.1)
     }
 }
 
@@ -84,5 +138,35 @@ mod tests {
         assert_eq!((f, s), ([-1e5, -4e4], ContactState::Stick));
         let (f, s) = m.update(1.0, [-1e5, 4e4], [0.0, -1e-5]);
         assert_eq!((f, s), ([-1e5, -5e4], ContactState::Slip));
+    }
+
+    /// A bonded joint (fₜ = 1 MPa, c = 2 MPa) pulled open in two steps: the first
+    /// step breaks it, and the second, which opens it less than the first, finds no
+    /// tensile strength left (the intact law would give it kₙ Δδ = 0.5 MPa of tension).
+    #[test]
+    fn a_broken_bond_stays_broken() {
+        let m = MohrCoulomb {
+            cohesion: 2e6,
+            tensile_strength: 1e6,
+            ..law()
+        };
+        // kn = 1e11 N/m: 2e-5 m is 2 MPa > fₜ
+        let (f, s, h) = m.update_history(1.0, [0.0, 0.0], 0.0, [2e-5, 0.0]);
+        assert_eq!((f, s, h), ([0.0, 0.0], ContactState::Open, 1.0));
+        let (f, s, h) = m.update_history(1.0, f, h, [5e-6, 0.0]);
+        assert_eq!((f, s, h), ([0.0, 0.0], ContactState::Open, 1.0));
+        // intact: the same small opening is held in tension
+        let (f, s, h) = m.update_history(1.0, [0.0, 0.0], 0.0, [5e-6, 0.0]);
+        assert_eq!((s, h), (ContactState::Stick, 0.0));
+        assert!((f[0] - 5e5).abs() < 1e-6 && f[1] == 0.0, "{f:?}");
+        // sheared past c − σ tan φ under 1 MPa compression (limit 2.5 MPa): slips and
+        // breaks; then the dry friction limit 0.5 MPa holds
+        let (f, s, h) = m.update_history(1.0, [-1e6, 0.0], 0.0, [0.0, 3e-4]);
+        assert_eq!((f, s, h), ([-1e6, 2.5e6], ContactState::Slip, 1.0));
+        let (f, s, h) = m.update_history(1.0, f, h, [0.0, 0.0]);
+        assert_eq!((f, s, h), ([-1e6, 0.5e6], ContactState::Slip, 1.0));
+        // a dry joint (fₜ = c = 0) has no bond to break
+        let (_, s, h) = law().update_history(1.0, [0.0, 0.0], 0.0, [1e-6, 0.0]);
+        assert_eq!((s, h), (ContactState::Open, 0.0));
     }
 }

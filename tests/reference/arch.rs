@@ -417,6 +417,7 @@ fn solve_lp(bodies: &[Body], ifs: &[Interface], opts: &LimitOptions, mode: Lambd
             mz.push((m, sign));
         }
         // Σ joint forces + (λ s W, −W) = 0
+        fx.retain(|(_, c)| c.abs() > 1e-12);
         match lam {
             Some(l) => {
                 fx.push((l, opts.load_sign * w));
@@ -426,6 +427,11 @@ fn solve_lp(bodies: &[Body], ifs: &[Interface], opts: &LimitOptions, mode: Lambd
                 lp.add_constraint(&fx[..], ComparisonOp::Eq, -given * opts.load_sign * w);
             }
         }
+        // lever arms that vanish up to round-off (a joint through a centroid) give
+        // coefficients of 1e-17 next to O(1) ones, which the simplex cannot take: zero
+        let clean = |v: &mut Vec<(microlp::Variable, f64)>| v.retain(|(_, c)| c.abs() > 1e-12);
+        clean(&mut fy);
+        clean(&mut mz);
         lp.add_constraint(&fy[..], ComparisonOp::Eq, w);
         lp.add_constraint(&mz[..], ComparisonOp::Eq, 0.0);
     }

@@ -12,7 +12,10 @@
 //! factorization, the median and best of `reps` refactorizations with every value
 //! changed (all scaled by 1 + r·2⁻²⁰), one solve, and where a refactorization's time goes
 //! (thread time summed over the subdomains' sparse factorizations, over their Schur
-//! complements, and over the dense interface fronts). Then the reuse case of a secant
+//! complements, and over the dense interface fronts), with the critical path in thread
+//! CPU time (`SubstructureStats::last_critical_path_seconds`: the time with a free core
+//! per subdomain, which the other jobs of a shared machine do not inflate the way they
+//! inflate the wall time). Then the reuse case of a secant
 //! iteration in which the contacts of one subdomain changed: 5 % of the contacts joining
 //! two blocks of subdomain 0 have their springs divided by 1000 (an opening joint),
 //! alternately on and off, so that each factorization sees one changed subdomain; its
@@ -99,21 +102,32 @@ struct Timed {
     refactor: f64,
     best: f64,
     solve: f64,
+    /// Median of `probe` after each refactorization.
+    probe: f64,
     x: Vec<f64>,
 }
 
-/// Analysis, first factorization, `reps` full refactorizations, a solve of `k x = f`.
-fn time_backend(be: &mut dyn LinearBackend, k: &CsrMatrix, f: &[f64], reps: usize) -> Timed {
+/// Analysis, first factorization, `reps` full refactorizations (`probe` read after each),
+/// a solve of `k x = f`.
+fn time_backend<B: LinearBackend + ?Sized>(
+    be: &mut B,
+    k: &CsrMatrix,
+    f: &[f64],
+    reps: usize,
+    mut probe: impl FnMut(&B) -> f64,
+) -> Timed {
     let t = Instant::now();
     be.analyze(&k.pattern).expect("analysis");
     let analysis = t.elapsed().as_secs_f64();
     let t = Instant::now();
     be.factorize(k).expect("factorization");
     let first = t.elapsed().as_secs_f64();
+    let mut probes = Vec::new();
     let (mut times, mut cpu): (Vec<f64>, Vec<f64>) = (1..=reps)
         .map(|r| {
             let a = scaled(k, r);
             let (_, wall, cpu) = timed(|| be.factorize(&a).expect("refactorization"));
+            probes.push(probe(be));
             (wall, cpu)
         })
         .unzip();
@@ -130,6 +144,7 @@ fn time_backend(be: &mut dyn LinearBackend, k: &CsrMatrix, f: &[f64], reps: usiz
         refactor_cpu: median(&mut cpu),
         best,
         solve,
+        probe: median(&mut probes),
         x,
     }
 }
@@ -166,14 +181,14 @@ fn main() {
 
     // the reference: faer's Cholesky of the whole matrix, AMD, one thread
     let mut faer = FaerCholesky::new();
-    let base = time_backend(&mut faer, &k, &f, reps);
+    let base = time_backend(&mut faer, &k, &f, reps, |_| f64::NAN);
     let base_mb = faer.stats().factor_nnz as f64 * 8.0 / 1e6;
-    println!("| backend | subdomains | threads | interface unknowns | analysis (s) | first factorization (s) | refactorization, median (s) | best (s) | CPU time of a refactorization, median (s) | solve (s) | speed-up: faer-cholesky / (refactorization + solve) | interface fronts (Γ, B) | sparse factorizations, Σ (s) | Schur complements, Σ (s) | interface fronts, Σ (s) | factor entries (M) | factor memory (MB) | work (G multiply-adds) | critical path (G) | work-bound speed-up | rel. difference to faer-cholesky |");
+    println!("| backend | subdomains | threads | interface unknowns | analysis (s) | first factorization (s) | refactorization, median (s) | best (s) | CPU time of a refactorization, median (s) | critical path, thread CPU, median (s) | solve (s) | speed-up: faer-cholesky / (refactorization + solve) | interface fronts (Γ, B) | sparse factorizations, Σ (s) | Schur complements, Σ (s) | interface fronts, Σ (s) | factor entries (M) | factor memory (MB) | work (G multiply-adds) | critical path (G) | work-bound speed-up | rel. difference to faer-cholesky |");
     println!(
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     println!(
-        "| faer-cholesky (AMD) | 1 | 1 | 0 | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | 1.00 | | | | | {:.1} | {:.0} | {:.1} | {:.1} | 1.00 | 0 |",
+        "| faer-cholesky (AMD) | 1 | 1 | 0 | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | | {:.3} | 1.00 | | | | | {:.1} | {:.0} | {:.1} | {:.1} | 1.00 | 0 |",
         base.analysis,
         base.first,
         base.refactor,
@@ -189,10 +204,10 @@ fn main() {
     let base_total = base.refactor + base.solve;
     // the same whole factorization with METIS nested dissection: what the ordering alone gives
     let mut metis = FaerCholesky::new().with_ordering(FillOrdering::Metis);
-    let r = time_backend(&mut metis, &k, &f, reps);
+    let r = time_backend(&mut metis, &k, &f, reps, |_| f64::NAN);
     let st = metis.stats();
     println!(
-        "| faer-cholesky-metis | 1 | 1 | 0 | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | {:.2} | | | | | {:.1} | {:.0} | {:.1} | {:.1} | {:.2} | {:.1e} |",
+        "| faer-cholesky-metis | 1 | 1 | 0 | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | | {:.3} | {:.2} | | | | | {:.1} | {:.0} | {:.1} | {:.1} | {:.2} | {:.1e} |",
         r.analysis,
         r.first,
         r.refactor,
@@ -222,17 +237,20 @@ fn main() {
                     .with_ordering(ordering)
                     .with_subdomain_threads(sub_threads);
                 configure(&mut be, &m).expect("configure");
-                let r = time_backend(&mut be, &k, &f, reps);
+                let r = time_backend(&mut be, &k, &f, reps, |b| {
+                    b.substructure_stats().last_critical_path_seconds
+                });
                 let ss = be.substructure_stats().clone();
                 let nf = (reps + 2) as f64;
                 println!(
-                    "| faer-substructured | {kp} | {nt} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | {:.2} | {} | {:.3} | {:.3} | {:.3} | {:.1} | {:.0} | {:.1} | {:.1} | {:.2} | {:.1e} |",
+                    "| faer-substructured | {kp} | {nt} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | {:.3} | {:.2} | {} | {:.3} | {:.3} | {:.3} | {:.1} | {:.0} | {:.1} | {:.1} | {:.2} | {:.1e} |",
                     ss.interface_size,
                     r.analysis,
                     r.first,
                     r.refactor,
                     r.best,
                     r.refactor_cpu,
+                    r.probe,
                     r.solve,
                     base_total / (r.refactor + r.solve),
                     ss.front_sizes
@@ -281,11 +299,13 @@ fn main() {
                 let mut times = Vec::new();
                 let before = be.substructure_stats().subdomain_factorizations;
                 let mut cpu = Vec::new();
+                let mut path = Vec::new();
                 for r in 0..2 * reps {
                     let a = if r % 2 == 0 { &k2 } else { &k };
                     let (_, wall, c) = timed(|| be.factorize(a).expect("refactorization"));
                     times.push(wall);
                     cpu.push(c);
+                    path.push(be.substructure_stats().last_critical_path_seconds);
                 }
                 let refactored = be.substructure_stats().subdomain_factorizations - before;
                 let fronts = be.substructure_stats().last_fronts;
@@ -298,8 +318,9 @@ fn main() {
                 faer.solve(&mut xf).expect("faer");
                 let t_one = median(&mut times);
                 let c_one = median(&mut cpu);
+                let p_one = median(&mut path);
                 reuse_rows.push(format!(
-                    "| {kp} | {nt} | {} | {:.2} | {fronts} | {} | {:.3} | {:.3} | {:.0} % | {:.3} | {:.0} % | {:.0} % | {:.0} % | {:.1} | {:.0} % | {:.0} % | {:.1e} |",
+                    "| {kp} | {nt} | {} | {:.2} | {fronts} | {} | {:.3} | {:.3} | {:.0} % | {:.3} | {:.0} % | {:.0} % | {:.0} % | {:.3} | {:.0} % | {:.0} % | {:.1} | {:.0} % | {:.0} % | {:.1e} |",
                     inside.len().div_ceil(20),
                     refactored as f64 / (2 * reps) as f64,
                     ss.interface_size,
@@ -310,6 +331,9 @@ fn main() {
                     100.0 * t_one / base.refactor,
                     100.0 * c_one / r.refactor_cpu,
                     100.0 * c_one / base.refactor_cpu,
+                    p_one,
+                    100.0 * p_one / r.probe,
+                    100.0 * p_one / base.refactor_cpu,
                     work / 1e9,
                     100.0 * work / be.stats().factor_flops,
                     100.0 * work / base_flops,
@@ -321,9 +345,9 @@ fn main() {
     println!(
         "\nOne subdomain changed (a secant iteration in which contacts of subdomain 0 open):\n"
     );
-    println!("| subdomains | threads | contacts changed | subdomains refactorized per factorization | fronts recomputed | interface unknowns | factorization, median (s) | full refactorization, same backend (s) | ratio | faer-cholesky refactorization (s) | ratio | CPU-time ratio to the full refactorization | CPU-time ratio to faer-cholesky | work recomputed (G multiply-adds) | work ratio to the full refactorization | work ratio to faer-cholesky | rel. difference to faer-cholesky |");
+    println!("| subdomains | threads | contacts changed | subdomains refactorized per factorization | fronts recomputed | interface unknowns | factorization, median (s) | full refactorization, same backend (s) | ratio | faer-cholesky refactorization (s) | ratio | CPU-time ratio to the full refactorization | CPU-time ratio to faer-cholesky | critical path, thread CPU (s) | its ratio to the full refactorization's | its ratio to faer-cholesky's CPU time | work recomputed (G multiply-adds) | work ratio to the full refactorization | work ratio to faer-cholesky | rel. difference to faer-cholesky |");
     println!(
-        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     for r in reuse_rows {
         println!("{r}");

@@ -102,6 +102,14 @@ pub struct SubstructureStats {
     /// Multiply-adds of what the last numeric factorization recomputed (subdomains and
     /// fronts), the load-independent measure of its work.
     pub last_flops: f64,
+    /// The longest chain of the last numeric factorization in time, s: a redone leaf
+    /// counts the CPU time of its thread (sparse factorization and Schur complement;
+    /// `CLOCK_THREAD_CPUTIME_ID`, NaN off Linux), a kept one nothing, a redone front its
+    /// wall time (dense kernels on `Par::rayon(t)`), the slower subtree at each front.
+    /// What that factorization takes with a free core per subdomain: on a shared machine,
+    /// where the wall time includes waits for a core, the estimate that does not depend
+    /// on the other jobs.
+    pub last_critical_path_seconds: f64,
     /// Sparse factorizations of the subdomains, summed over subdomains (wall time inside
     /// each task), s.
     pub subdomain_factor_seconds: f64,
@@ -123,6 +131,8 @@ struct Leaf {
     /// Wall time (inside its task) of the last refactorization, s: sparse factorization,
     /// Schur complement; negative once counted in the statistics.
     times: (f64, f64),
+    /// CPU time of its thread during the last refactorization (both parts), s.
+    cpu: f64,
 }
 
 /// An interface front.
@@ -363,19 +373,36 @@ impl Node {
         }
     }
 
+    /// The longest chain of `cost` through the tree: a leaf's cost, or a front's own plus
+    /// the most expensive of its children's chains (they run in parallel).
+    fn critical_path(&self, cost: &impl Fn(&Kind, &[u32]) -> f64) -> f64 {
+        let below = match &self.kind {
+            Kind::Leaf(_) => 0.0,
+            Kind::Front(f) => f
+                .children
+                .iter()
+                .map(|ch| ch.critical_path(cost))
+                .fold(0.0, f64::max),
+        };
+        below + cost(&self.kind, &self.bnd)
+    }
+
+    /// See [`SubstructureStats::last_critical_path_seconds`]; before the times are
+    /// marked counted.
+    fn last_critical_path_seconds(&self) -> f64 {
+        self.critical_path(&|kind, _| match kind {
+            Kind::Leaf(l) if l.times.0 >= 0.0 => l.cpu,
+            Kind::Leaf(_) => 0.0,
+            Kind::Front(f) => f.time.max(0.0),
+        })
+    }
+
     /// See [`SubstructureStats::critical_path_flops`].
     fn critical_path_flops(&self) -> f64 {
-        match &self.kind {
+        self.critical_path(&|kind, bnd| match kind {
             Kind::Leaf(l) => l.flops(),
-            Kind::Front(f) => {
-                let below = f
-                    .children
-                    .iter()
-                    .map(Node::critical_path_flops)
-                    .fold(0.0, f64::max);
-                below + front_flops(f.own.len(), self.bnd.len())
-            }
-        }
+            Kind::Front(f) => front_flops(f.own.len(), bnd.len()),
+        })
     }
 
     fn memory_bytes(&self) -> usize {
@@ -421,7 +448,7 @@ impl Leaf {
     /// Sparse factorization of Kᵢ and its Schur complement Cᵢ (lower, Bᵢ order), with
     /// the smallest interior pivot ratio.
     fn refactorize(&mut self, cx: Ctx<'_>) -> Result<(Mat<f64>, (f64, usize)), SolveError> {
-        let t = Instant::now();
+        let (t, cpu) = (Instant::now(), thread_cpu_seconds());
         self.half.factorize(cx.a)?;
         let pivots = self
             .half
@@ -454,6 +481,7 @@ impl Leaf {
             c[(k as usize, l as usize)] += self.half.values.values[t];
         }
         self.times = (t_factor, t.elapsed().as_secs_f64());
+        self.cpu = thread_cpu_seconds() - cpu;
         Ok((c, pivots))
     }
 }
@@ -665,6 +693,7 @@ fn build(
                     lss: Mat::zeros(0, 0),
                     x: Vec::new(),
                     times: (-1.0, -1.0),
+                    cpu: 0.0,
                 })),
             })
         }
@@ -1001,6 +1030,7 @@ impl LinearBackend for FaerCholeskySubstructured {
                 fronts.push((f.time, front_flops(f.own.len(), bnd.len())))
             });
         let ss = &mut self.sub_stats;
+        ss.last_critical_path_seconds = an.root.last_critical_path_seconds();
         ss.last_refactorized.clear();
         ss.last_fronts = 0;
         ss.last_flops = 0.0;
@@ -1071,6 +1101,22 @@ impl LinearBackend for FaerCholeskySubstructured {
         }
         Ok(())
     }
+}
+
+/// CPU time consumed by the calling thread so far, s (NaN where unavailable).
+fn thread_cpu_seconds() -> f64 {
+    #[cfg(target_os = "linux")]
+    {
+        let mut ts = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: clock_gettime writes one timespec into `ts`, which outlives the call.
+        if unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) } == 0 {
+            return ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9;
+        }
+    }
+    f64::NAN
 }
 
 /// Marks the times of every node as counted (negative): the next factorization's

@@ -20,9 +20,12 @@
 //!
 //! Distributed (feature `mpi`, under `mpirun`): every rank holds the same matrix (dfem
 //! assembles it redundantly) and calls the backend with the same arguments; the unknowns
-//! are partitioned over the ranks by METIS ([`dfem_kernels::metis_partition`], whole
-//! nodes, few couplings cut) and renumbered so that each rank owns a contiguous range of
-//! rows; each rank sets only its own rows of the MPIAIJ matrix and its own entries of the
+//! are partitioned over the ranks by the partition given with
+//! [`LinearBackend::set_partition`] (dfem's block partition, `dfem::solve::block_partition`:
+//! whole blocks, cuts along joints — the subdomains of `faer-substructured` come from the
+//! same function) or else by METIS on the node graph ([`dfem_kernels::metis_partition`],
+//! whole nodes, few couplings cut), and renumbered so that each rank owns a contiguous
+//! range of rows; each rank sets only its own rows of the MPIAIJ matrix and its own entries of the
 //! right-hand side; the solution is gathered on every rank (`VecScatterCreateToAll`) and
 //! returned in dfem's numbering. Without `mpi` each process solves alone (MPI_COMM_SELF).
 //!
@@ -151,14 +154,30 @@ struct Layout {
 }
 
 impl Layout {
-    /// Identity on one process; METIS k-way parts in rank order on several. Rank 0's
+    /// Identity on one process; on several, the parts of `given` (one per unknown, each
+    /// below `size`) or else METIS k-way parts of the node graph, in rank order. Rank 0's
     /// partition is broadcast, so every rank uses the same even if METIS differed.
-    fn new(pattern: &CsrPattern, rank: usize, size: usize) -> Result<Self, SolveError> {
+    fn new(
+        pattern: &CsrPattern,
+        rank: usize,
+        size: usize,
+        given: Option<&[u32]>,
+    ) -> Result<Self, SolveError> {
         let n = pattern.n();
-        let mut part = if size > 1 {
-            dfem_kernels::metis_partition(pattern, size)?
-        } else {
-            vec![0u32; n]
+        let mut part = match given {
+            _ if size <= 1 => vec![0u32; n],
+            Some(p) => {
+                if p.len() != n || p.iter().any(|&r| r as usize >= size) {
+                    return Err(SolveError::Other(format!(
+                        "the partition given covers {} unknowns with parts up to {}; \
+                         the matrix has {n} unknowns and the run {size} processes",
+                        p.len(),
+                        p.iter().max().map_or(0, |&r| r)
+                    )));
+                }
+                p.to_vec()
+            }
+            None => dfem_kernels::metis_partition(pattern, size)?,
         };
         if size > 1 {
             // SAFETY: n integers on every rank (the same pattern everywhere).
@@ -273,6 +292,8 @@ pub struct Petsc {
     gather: sys::VecScatter,
     db: sys::PetscOptions,
     near_null: Vec<Vec<f64>>,
+    /// The partition of the unknowns over the ranks given by `set_partition`.
+    partition: Option<Vec<u32>>,
     /// dfem's copy of the last factorized matrix (skip test, true residual).
     last: Option<CsrMatrix>,
     ready: bool,
@@ -303,6 +324,7 @@ impl Petsc {
             gather: std::ptr::null_mut(),
             db: std::ptr::null_mut(),
             near_null: Vec::new(),
+            partition: None,
             last: None,
             ready: false,
             stats: SolverStats {
@@ -375,7 +397,7 @@ impl Petsc {
 
     /// Creates the matrix (pattern, zero values), vectors, gather context and KSP.
     fn create(&mut self, pattern: &CsrPattern) -> Result<(), SolveError> {
-        let layout = Layout::new(pattern, self.rank, self.size)?;
+        let layout = Layout::new(pattern, self.rank, self.size, self.partition.as_deref())?;
         let mut rows = LocalRows::new(pattern, &layout);
         let nloc = layout.local().len() as sys::PetscInt;
         let n = pattern.n() as sys::PetscInt;
@@ -693,6 +715,23 @@ impl LinearBackend for Petsc {
 
     fn stats(&self) -> &SolverStats {
         &self.stats
+    }
+
+    fn partition_parts(&self) -> Option<usize> {
+        (self.size > 1).then_some(self.size)
+    }
+
+    fn set_partition(&mut self, part: &[u32]) -> Result<(), SolveError> {
+        if self.size > 1 && self.partition.as_deref() != Some(part) {
+            self.partition = Some(part.to_vec());
+            // the layout follows the partition: analyze again at the next factorization
+            let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+            self.destroy();
+            self.pattern = None;
+            self.last = None;
+            self.ready = false;
+        }
+        Ok(())
     }
 
     fn set_near_null_space(&mut self, modes: &[Vec<f64>]) -> Result<(), SolveError> {

@@ -76,6 +76,11 @@ pub struct SolverStats {
     pub min_pivot_ratio: f64,
     /// Unknown (original numbering) where `min_pivot_ratio` was reached.
     pub min_pivot_index: usize,
+    /// Multiply-adds of one numeric factorization with the last analysis, from its symbolic
+    /// structure (Σ over the columns of L of m(m + 1)/2, m the column's entries, plus the
+    /// dense work of a substructured backend); 0 when the backend does not report it. A
+    /// measure of work that does not depend on the machine's load.
+    pub factor_flops: f64,
     /// Memory held by the factor or preconditioner of the last factorization, bytes, as
     /// reported by the backend; 0 when it does not report it (then see `factor_nnz`).
     pub memory_bytes: usize,
@@ -104,11 +109,47 @@ pub trait LinearBackend: Send {
     fn set_near_null_space(&mut self, _modes: &[Vec<f64>]) -> Result<(), SolveError> {
         Ok(())
     }
+    /// Number of parts this backend wants the unknowns partitioned into, to be handed
+    /// over with [`LinearBackend::set_partition`]: the subdomains of
+    /// `faer-substructured`, the MPI ranks of a distributed PETSc. `None` (the default)
+    /// when the backend uses no partition.
+    fn partition_parts(&self) -> Option<usize> {
+        None
+    }
+    /// A partition of the unknowns: `part[i]` is the part (0-based) of unknown i, one
+    /// entry per unknown of the matrices to come. dfem computes it from the structure
+    /// (whole blocks, cuts along joints: `dfem::solve::block_partition`). Backends that
+    /// use no partition ignore it (the default); the others use it from their next
+    /// analysis on instead of their own. Call before `factorize`.
+    fn set_partition(&mut self, _part: &[u32]) -> Result<(), SolveError> {
+        Ok(())
+    }
 }
 
 /// Whether two value arrays are bit-identical (the skip test of `factorize`).
 pub fn same_bits(a: &[f64], b: &[f64]) -> bool {
     a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+/// maxᵢ |xᵢ − yᵢ| / maxᵢ |yᵢ|: how far a solution `x` is from a reference `y`, relative
+/// to the reference's largest entry (NaN when `y` is all zeros).
+pub fn max_relative_difference(x: &[f64], y: &[f64]) -> f64 {
+    let d = x
+        .iter()
+        .zip(y)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    d / y.iter().map(|v| v.abs()).fold(0.0, f64::max)
+}
+
+/// Checks that a matrix's values fit its pattern (before a numeric factorization).
+pub(crate) fn check_values(a: &CsrMatrix) -> Result<(), SolveError> {
+    if a.values.len() != a.pattern.nnz() {
+        return Err(SolveError::Other(
+            "matrix values do not match the pattern".into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Names accepted by [`backend_from_name`].
@@ -119,11 +160,14 @@ pub const BACKENDS: &[&str] = &[
     "faer-ldlt",
     "faer-ldlt-metis",
     "faer-lu",
+    "faer-substructured",
     "pcg",
 ];
 
 /// Builds a backend from its name (one of [`BACKENDS`]) with default settings. The
-/// `-metis` variants order the unknowns by METIS nested dissection instead of AMD.
+/// `-metis` variants order the unknowns by METIS nested dissection instead of AMD;
+/// `faer-substructured` is [`crate::substructure::FaerCholeskySubstructured`] with two
+/// subdomains.
 /// The error message lists the valid names.
 pub fn backend_from_name(name: &str) -> Result<Box<dyn LinearBackend>, String> {
     match name {
@@ -137,6 +181,9 @@ pub fn backend_from_name(name: &str) -> Result<Box<dyn LinearBackend>, String> {
             crate::faer_backend::FaerLdlt::new().with_ordering(FillOrdering::Metis),
         )),
         "faer-lu" => Ok(Box::new(crate::faer_backend::FaerLu::new())),
+        "faer-substructured" => Ok(Box::new(
+            crate::substructure::FaerCholeskySubstructured::new(),
+        )),
         "pcg" => Ok(Box::new(crate::pcg::Pcg::new())),
         _ => Err(format!(
             "unknown linear backend '{name}'; valid names: {}",

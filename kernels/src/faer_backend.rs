@@ -92,15 +92,41 @@ impl CholAnalysis {
     }
 
     /// Original index of permuted index `p`.
-    fn original(&self, p: usize) -> usize {
+    pub(crate) fn original(&self, p: usize) -> usize {
         match self.symbolic.perm() {
             Some(perm) => perm.arrays().0[p] as usize,
             None => p,
         }
     }
 
+    /// Multiply-adds of a numeric factorization: Σ over the columns of L of m(m + 1)/2,
+    /// m the column's stored entries (the diagonal included).
+    pub(crate) fn flops(&self) -> f64 {
+        let col = |m: usize| (m * (m + 1) / 2) as f64;
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => s
+                .col_ptr()
+                .windows(2)
+                .map(|w| col((w[1] - w[0]) as usize))
+                .sum(),
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let begin = s.supernode_begin();
+                let end = s.supernode_end();
+                // the values of supernode k: a (c + p) × c block, p rows below it
+                let vals = s.col_ptr_for_val();
+                (0..s.n_supernodes())
+                    .map(|k| {
+                        let c = (end[k] - begin[k]) as usize;
+                        let p = (vals[k + 1] - vals[k]) as usize / c.max(1) - c;
+                        (0..c).map(|j| col(c - j + p)).sum::<f64>()
+                    })
+                    .sum()
+            }
+        }
+    }
+
     /// Diagonal of the stored factor, in permuted order: L_pp for LLᵀ, D_pp for LDLᵀ.
-    fn factor_diagonal(&self) -> Vec<f64> {
+    pub(crate) fn factor_diagonal(&self) -> Vec<f64> {
         let n = self.pattern.n();
         let mut d = vec![0.0; n];
         match self.symbolic.raw() {
@@ -178,11 +204,13 @@ pub(crate) struct CholeskyCore {
 }
 
 impl CholeskyCore {
-    /// An LLᵀ core with a given permutation, always supernodal, sequential.
-    pub(crate) fn llt_with_perm(fwd: Vec<u32>, inv: Vec<u32>) -> Self {
+    /// An LLᵀ core with a given permutation, always supernodal, its numeric
+    /// factorization on `Par::rayon(threads)` (1 = sequential).
+    pub(crate) fn llt_with_perm(fwd: Vec<u32>, inv: Vec<u32>, threads: usize) -> Self {
         let mut c = Self::new(Kind::Llt);
         c.custom_perm = Some((fwd, inv));
         c.supernodal_threshold = 0.0;
+        c.threads = threads.max(1);
         c
     }
 
@@ -281,7 +309,7 @@ impl CholeskyCore {
             advise_huge_pages(&mut l_values);
         }
         self.stats.factor_nnz = l_values.len();
-        self.analysis = Some(CholAnalysis {
+        let analysis = CholAnalysis {
             pattern: pattern.clone(),
             col_ptr,
             symbolic,
@@ -290,7 +318,9 @@ impl CholeskyCore {
             diag_pos: pattern.diagonal_positions(),
             factored: false,
             last_values: Vec::new(),
-        });
+        };
+        self.stats.factor_flops = analysis.flops();
+        self.analysis = Some(analysis);
         self.stats.symbolic_factorizations += 1;
         self.stats.symbolic_seconds += t.elapsed().as_secs_f64();
         Ok(())

@@ -7,6 +7,8 @@
 //! * [`backend`]: the [`LinearBackend`] trait and the registry [`backend_from_name`].
 //! * [`faer_backend`]: sparse Cholesky LLᵀ, LDLᵀ and LU on faer.
 //! * [`split`]: sparse Cholesky on two threads through a METIS vertex bisection.
+//! * [`substructure`]: sparse Cholesky by substructuring, k subdomains in parallel, the
+//!   unchanged ones reused between factorizations.
 //! * [`pcg`]: preconditioned conjugate gradients (Jacobi, block-Jacobi, two-level with a
 //!   rigid-body coarse space).
 //! * [`ordering`]: fill-reducing orderings (AMD, METIS nested dissection).
@@ -23,11 +25,16 @@ pub mod mm;
 pub mod ordering;
 pub mod pcg;
 pub mod split;
+pub mod substructure;
 
 pub use assembly::{AssemblyPlan, Connectivity, CONSTRAINED};
-pub use backend::{backend_from_name, same_bits, LinearBackend, SolveError, SolverStats, BACKENDS};
+pub use backend::{
+    backend_from_name, max_relative_difference, same_bits, LinearBackend, SolveError, SolverStats,
+    BACKENDS,
+};
 pub use csr::{CsrMatrix, CsrPattern};
 pub use faer_backend::{FaerCholesky, FaerLdlt, FaerLu};
-pub use ordering::{metis_partition, FillOrdering};
+pub use ordering::{metis_partition, metis_partition_graph, FillOrdering};
 pub use pcg::{BlockNodes2d, CoarseCorrection, CoarseSpace, Pcg, Preconditioner};
 pub use split::FaerCholeskySplit;
+pub use substructure::{FaerCholeskySubstructured, SubstructureStats};

@@ -205,39 +205,164 @@ pub(crate) fn metis_separator(pattern: &CsrPattern) -> Result<Vec<u8>, SolveErro
 /// the components of a node stay together). Returns the part of each unknown. For
 /// distributing the rows of a matrix over MPI ranks. Deterministic (METIS' fixed seed).
 pub fn metis_partition(pattern: &CsrPattern, nparts: usize) -> Result<Vec<u32>, SolveError> {
+    node_graph_partition(pattern, nparts, false)
+}
+
+/// [`metis_partition`] by recursive bisection (`METIS_PartGraphRecursive`): parts
+/// `lo..mid` and `mid..hi` (mid = lo + (hi − lo) / 2) are the two sides of one bisection,
+/// recursively from `0..nparts`, the nesting the substructured backend follows.
+pub(crate) fn metis_bisection_partition(
+    pattern: &CsrPattern,
+    nparts: usize,
+) -> Result<Vec<u32>, SolveError> {
+    node_graph_partition(pattern, nparts, true)
+}
+
+fn node_graph_partition(
+    pattern: &CsrPattern,
+    nparts: usize,
+    recursive: bool,
+) -> Result<Vec<u32>, SolveError> {
     let n = pattern.n();
     if nparts <= 1 || n == 0 {
         return Ok(vec![0; n]);
     }
     let mut g = node_graph(pattern)?;
-    let nv = g.first.len() - 1;
-    if nv < nparts {
-        // fewer vertices than parts: one vertex per part, the rest empty
-        let mut out = vec![0u32; n];
-        for v in 0..nv {
-            out[g.first[v]..g.first[v + 1]].fill(v as u32);
+    let part = part_graph(
+        &mut g.xadj,
+        &mut g.adjncy,
+        &mut g.vwgt,
+        None,
+        nparts,
+        recursive,
+    )?;
+    let mut out = vec![0u32; n];
+    for (v, &p) in part.iter().enumerate() {
+        out[g.first[v]..g.first[v + 1]].fill(p);
+    }
+    Ok(out)
+}
+
+/// A partition of an undirected weighted graph into `nparts` parts by recursive
+/// bisection (METIS, `METIS_PartGraphRecursive`): parts of nearly equal total vertex
+/// weight with a small total weight of the edges cut, numbered along the bisections —
+/// parts `lo..mid` and `mid..hi` (mid = lo + (hi − lo) / 2) are the two sides of one
+/// bisection, recursively from `0..nparts` (the nesting `faer-substructured` follows). `vertex_weights[v]` ≥ 1
+/// is the weight of vertex v; `edges` are `(a, b, weight)`, in any order, a repeated pair
+/// adding its weights, self loops ignored. Returns the part of each vertex (`0..nparts`;
+/// a part may be empty when there are fewer vertices than parts). Deterministic.
+///
+/// dfem partitions its blocks with it (vertices = blocks weighted by their unknowns, edges
+/// = joints weighted by their contacts), so that every cut runs along joints.
+pub fn metis_partition_graph(
+    vertex_weights: &[u32],
+    edges: &[(u32, u32, u32)],
+    nparts: usize,
+) -> Result<Vec<u32>, SolveError> {
+    let nv = vertex_weights.len();
+    if nv >= i32::MAX as usize {
+        return Err(SolveError::Other(
+            "graph too large for METIS' 32-bit indices".into(),
+        ));
+    }
+    if let Some(&(a, b, _)) = edges
+        .iter()
+        .find(|&&(a, b, _)| a as usize >= nv || b as usize >= nv)
+    {
+        return Err(SolveError::Other(format!(
+            "graph edge ({a}, {b}) out of range: {nv} vertices"
+        )));
+    }
+    if nparts <= 1 || nv == 0 {
+        return Ok(vec![0; nv]);
+    }
+    // symmetric adjacency, sorted, duplicates merged (weights summed)
+    let mut adj: Vec<(u32, u32, u32)> = Vec::with_capacity(2 * edges.len());
+    for &(a, b, w) in edges {
+        if a != b {
+            adj.push((a, b, w));
+            adj.push((b, a, w));
         }
-        return Ok(out);
+    }
+    adj.sort_unstable_by_key(|&(a, b, _)| (a, b));
+    let mut xadj = vec![0i32; nv + 1];
+    let mut adjncy: Vec<i32> = Vec::with_capacity(adj.len());
+    let mut adjwgt: Vec<i32> = Vec::with_capacity(adj.len());
+    let mut last = (u32::MAX, u32::MAX);
+    for &(a, b, w) in &adj {
+        let w = i32::try_from(w.max(1)).unwrap_or(i32::MAX);
+        if (a, b) == last {
+            let l = adjwgt.len() - 1;
+            adjwgt[l] = adjwgt[l].saturating_add(w);
+        } else {
+            adjncy.push(b as i32);
+            adjwgt.push(w);
+            xadj[a as usize + 1] += 1;
+            last = (a, b);
+        }
+    }
+    if adjncy.len() >= i32::MAX as usize {
+        return Err(SolveError::Other(
+            "graph too large for METIS' 32-bit indices".into(),
+        ));
+    }
+    for v in 0..nv {
+        xadj[v + 1] += xadj[v];
+    }
+    let mut vwgt: Vec<i32> = vertex_weights
+        .iter()
+        .map(|&w| i32::try_from(w.max(1)).unwrap_or(i32::MAX))
+        .collect();
+    part_graph(
+        &mut xadj,
+        &mut adjncy,
+        &mut vwgt,
+        Some(&mut adjwgt),
+        nparts,
+        true,
+    )
+}
+
+/// `METIS_PartGraphKway` (or `METIS_PartGraphRecursive` if `recursive`) on a CSR graph
+/// (symmetric, no self loops), one part per vertex; with fewer vertices than parts,
+/// vertex v gets part v.
+fn part_graph(
+    xadj: &mut [i32],
+    adjncy: &mut [i32],
+    vwgt: &mut [i32],
+    adjwgt: Option<&mut [i32]>,
+    nparts: usize,
+    recursive: bool,
+) -> Result<Vec<u32>, SolveError> {
+    let nv = xadj.len() - 1;
+    if nv < nparts {
+        return Ok((0..nv as u32).collect());
     }
     let mut part = vec![0i32; nv];
     let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
     let (mut nvtxs, mut ncon, mut np, mut cut) = (nv as i32, 1i32, nparts as i32, 0i32);
+    let adjwgt = adjwgt.map_or(std::ptr::null_mut(), |w| w.as_mut_ptr());
     let status = {
         let _guard = METIS_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-        // SAFETY: array lengths as METIS expects (xadj nv + 1, adjncy xadj[nv], vwgt and
-        // part nv, options METIS_NOPTIONS); symmetric graph without self loops; null
-        // pointers for the optional arrays.
+        // SAFETY: array lengths as METIS expects (xadj nv + 1, adjncy and adjwgt (if not
+        // null) xadj[nv], vwgt and part nv, options METIS_NOPTIONS); symmetric graph
+        // without self loops; null pointers for the other optional arrays.
         unsafe {
             metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
             options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
-            metis_sys::METIS_PartGraphKway(
+            let f = if recursive {
+                metis_sys::METIS_PartGraphRecursive
+            } else {
+                metis_sys::METIS_PartGraphKway
+            };
+            f(
                 &mut nvtxs,
                 &mut ncon,
-                g.xadj.as_mut_ptr(),
-                g.adjncy.as_mut_ptr(),
-                g.vwgt.as_mut_ptr(),
+                xadj.as_mut_ptr(),
+                adjncy.as_mut_ptr(),
+                vwgt.as_mut_ptr(),
                 std::ptr::null_mut(),
-                std::ptr::null_mut(),
+                adjwgt,
                 &mut np,
                 std::ptr::null_mut(),
                 std::ptr::null_mut(),
@@ -249,18 +374,18 @@ pub fn metis_partition(pattern: &CsrPattern, nparts: usize) -> Result<Vec<u32>, 
     };
     if status != metis_sys::rstatus_et_METIS_OK {
         return Err(SolveError::Other(format!(
-            "METIS_PartGraphKway failed with status {status}"
+            "METIS partitioning failed with status {status}"
         )));
     }
-    let mut out = vec![0u32; n];
-    for v in 0..nv {
-        let p = part[v];
-        if !(0..nparts as i32).contains(&p) {
-            return Err(SolveError::Other(
-                "METIS returned an invalid partition".into(),
-            ));
-        }
-        out[g.first[v]..g.first[v + 1]].fill(p as u32);
-    }
-    Ok(out)
+    part.iter()
+        .map(|&p| {
+            if (0..nparts as i32).contains(&p) {
+                Ok(p as u32)
+            } else {
+                Err(SolveError::Other(
+                    "METIS returned an invalid partition".into(),
+                ))
+            }
+        })
+        .collect()
 }

@@ -38,27 +38,46 @@ use faer::{Accum, Conj, Mat, MatMut, Par};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// One half K = A\[I ∪ S, I ∪ S\] with its factorization.
-struct Half {
+/// How the interior unknowns of a [`Half`] are ordered (the separator always comes last).
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum InteriorOrder<'a> {
+    /// A global order restricted to the interior: `rank[unknown]` = its position.
+    GlobalRank(&'a [u32]),
+    /// METIS nested dissection of the interior's own graph.
+    Metis,
+    /// faer's AMD on the interior's own pattern.
+    Amd,
+}
+
+/// A principal sub-matrix K = A\[I ∪ S, I ∪ S\] (an interior I and the separator or
+/// interface unknowns S it couples to, last) with its sparse Cholesky factorization. Its
+/// trailing block L_SS satisfies L_SS L_SSᵀ = K_SS − A_SI A_II⁻¹ A_IS, and L_SI y for
+/// y = L_II⁻¹ b_I is the interior's contribution to a forward solve: the pieces of a
+/// one-level substructuring (here and in [`crate::substructure`]). `threads` > 1 runs
+/// faer's numeric factorization on `Par::rayon(threads)` (a fixed split of the dense
+/// supernode kernels: the same bits in any pool).
+pub(crate) struct Half {
     /// Local unknown → global unknown: the interior first, then S in separator order.
-    dofs: Vec<u32>,
-    n_int: usize,
+    pub(crate) dofs: Vec<u32>,
+    pub(crate) n_int: usize,
     /// Stored entry of K → stored entry of A.
-    value_map: Vec<usize>,
-    core: CholeskyCore,
+    pub(crate) value_map: Vec<usize>,
+    pub(crate) core: CholeskyCore,
     /// Permuted position (minus n_int) of the k-th separator unknown.
-    s_pos: Vec<usize>,
-    values: CsrMatrix,
+    pub(crate) s_pos: Vec<usize>,
+    /// The values of K loaded by the last [`Half::factorize`].
+    pub(crate) values: CsrMatrix,
     /// Scratch vector in permuted order.
     v: Vec<f64>,
 }
 
 impl Half {
-    fn new(
+    pub(crate) fn new(
         a: &CsrPattern,
         interior: Vec<u32>,
         sep: &[u32],
-        global_rank: Option<&[u32]>,
+        order: InteriorOrder<'_>,
+        threads: usize,
     ) -> Result<Self, SolveError> {
         let n_int = interior.len();
         let mut dofs = interior;
@@ -93,23 +112,24 @@ impl Half {
         let pattern = Arc::new(CsrPattern::from_parts_unchecked(nl, row_ptr, col_idx));
         // the interior block in the given order (global AMD restricted to this half, or
         // METIS nested dissection of the half), then S in separator order
-        let mut fwd = match global_rank {
-            Some(rank) => {
+        let mut fwd = match order {
+            InteriorOrder::GlobalRank(rank) => {
                 let mut f: Vec<u32> = (0..n_int as u32).collect();
                 f.sort_by_key(|&l| rank[dofs[l as usize] as usize]);
                 f
             }
-            None => {
+            InteriorOrder::Metis => {
                 let sub = sub_pattern(&pattern, n_int);
                 crate::ordering::metis_nested_dissection(&sub)?.0
             }
+            InteriorOrder::Amd => amd_order(&pattern, n_int)?,
         };
         fwd.extend(n_int as u32..nl as u32);
         let mut inv = vec![0u32; nl];
         for (new, &old) in fwd.iter().enumerate() {
             inv[old as usize] = new as u32;
         }
-        let mut core = CholeskyCore::llt_with_perm(fwd, inv);
+        let mut core = CholeskyCore::llt_with_perm(fwd, inv, threads);
         core.analyze(&pattern)?;
         let an = core.analysis.as_ref().expect("analyzed");
         if !matches!(an.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
@@ -141,7 +161,7 @@ impl Half {
     }
 
     /// Copies the values from A and factorizes.
-    fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
+    pub(crate) fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
         for (v, &p) in self.values.values.iter_mut().zip(&self.value_map) {
             *v = a.values[p];
         }
@@ -158,7 +178,7 @@ impl Half {
     }
 
     /// The trailing |S| × |S| block of L (permuted separator order), dense.
-    fn trailing_block(&self) -> Mat<f64> {
+    pub(crate) fn trailing_block(&self) -> Mat<f64> {
         let an = self.core.analysis.as_ref().expect("analyzed");
         let ns = self.s_pos.len();
         let p0 = self.n_int;
@@ -190,7 +210,7 @@ impl Half {
 
     /// Forward solve with the interior right-hand side `b` (global) and zero on S; returns
     /// L_SI y_I in separator order (the coupling term of the global forward solve).
-    fn forward(&mut self, b: &[f64], lss: &Mat<f64>) -> Vec<f64> {
+    pub(crate) fn forward(&mut self, b: &[f64], lss: &Mat<f64>) -> Vec<f64> {
         let an = self.core.analysis.as_mut().expect("analyzed");
         let inv = an.symbolic.perm().map(|p| p.arrays().1.to_vec());
         self.v.fill(0.0);
@@ -221,9 +241,10 @@ impl Half {
         (0..ns).map(|k| c[self.s_pos[k]]).collect()
     }
 
-    /// Backward solve given the separator solution `xs` (separator order); writes the
-    /// interior unknowns of `x` (global).
-    fn backward(&mut self, xs: &[f64], lss: &Mat<f64>, x: &mut [f64]) {
+    /// Backward solve after [`Half::forward`], given the separator solution `xs`
+    /// (separator order); returns the interior unknowns in interior order
+    /// (`dofs[..n_int]`).
+    pub(crate) fn backward(&mut self, xs: &[f64], lss: &Mat<f64>) -> Vec<f64> {
         let ns = self.s_pos.len();
         let mut xp = vec![0.0; ns];
         for (k, &p) in self.s_pos.iter().enumerate() {
@@ -248,10 +269,47 @@ impl Half {
             );
         }
         let inv = an.symbolic.perm().map(|p| p.arrays().1.to_vec());
-        for j in 0..self.n_int {
-            let p = inv.as_ref().map_or(j, |i| i[j] as usize);
-            x[self.dofs[j] as usize] = self.v[p];
+        (0..self.n_int)
+            .map(|j| self.v[inv.as_ref().map_or(j, |i| i[j] as usize)])
+            .collect()
+    }
+
+    /// Number of stored entries of K in the interior rows (A_II and A_IS): the first ones
+    /// of `values`, since the interior rows come first.
+    pub(crate) fn interior_nnz(&self) -> usize {
+        self.values.pattern.row_ptr()[self.n_int]
+    }
+
+    /// Whether the interior rows of K (A_II and A_IS) hold in A the values loaded by the
+    /// last factorization, bit for bit.
+    pub(crate) fn interior_unchanged(&self, a: &CsrMatrix) -> bool {
+        let m = self.interior_nnz();
+        self.value_map[..m]
+            .iter()
+            .zip(&self.values.values[..m])
+            .all(|(&p, v)| a.values[p].to_bits() == v.to_bits())
+    }
+
+    /// The smallest pivot ratio L_jj² / a_jj over the interior unknowns (the pivots of a
+    /// global factorization that eliminates this interior first) and its global unknown;
+    /// `diag(i)` = a_ii. `(∞, 0)` with no interior.
+    pub(crate) fn interior_min_pivot_ratio(&self, diag: impl Fn(usize) -> f64) -> (f64, usize) {
+        let an = self.core.analysis.as_ref().expect("analyzed");
+        let d = an.factor_diagonal();
+        let mut best = (f64::INFINITY, 0usize);
+        for (p, &l) in d.iter().enumerate() {
+            let local = an.original(p);
+            if local >= self.n_int {
+                continue;
+            }
+            let g = self.dofs[local] as usize;
+            let aii = diag(g);
+            let r = if aii != 0.0 { l * l / aii.abs() } else { l * l };
+            if r < best.0 || r.is_nan() && !best.0.is_nan() {
+                best = (r, g);
+            }
         }
+        best
     }
 }
 
@@ -383,9 +441,13 @@ impl FaerCholeskySplit {
             }
             FillOrdering::Metis => None,
         };
+        let order = match &rank {
+            Some(r) => InteriorOrder::GlobalRank(r),
+            None => InteriorOrder::Metis,
+        };
         let (h1, h2) = rayon::join(
-            || Half::new(pattern, i1, &sep, rank.as_deref()),
-            || Half::new(pattern, i2, &sep, rank.as_deref()),
+            || Half::new(pattern, i1, &sep, order, 1),
+            || Half::new(pattern, i2, &sep, order, 1),
         );
         let (h1, h2) = (h1?, h2?);
         let ns = sep.len();
@@ -450,11 +512,7 @@ impl LinearBackend for FaerCholeskySplit {
 
     fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
         self.analyze(&a.pattern)?;
-        if a.values.len() != a.pattern.nnz() {
-            return Err(SolveError::Other(
-                "matrix values do not match the pattern".into(),
-            ));
-        }
+        crate::backend::check_values(a)?;
         let t = Instant::now();
         let result = match &mut self.inner {
             Inner::None => unreachable!("analyzed"),
@@ -560,18 +618,12 @@ impl LinearBackend for FaerCholeskySplit {
                     Par::Seq,
                     MemStack::new(&mut MemBuffer::new(faer::dyn_stack::StackReq::EMPTY)),
                 );
-                let mut x1 = vec![0.0; n];
-                let mut x2 = vec![0.0; n];
                 let xs_ref = &xs;
-                rayon::join(
-                    || h1.backward(xs_ref, l1, &mut x1),
-                    || h2.backward(xs_ref, l2, &mut x2),
-                );
-                for &g in &h1.dofs[..h1.n_int] {
-                    rhs[g as usize] = x1[g as usize];
-                }
-                for &g in &h2.dofs[..h2.n_int] {
-                    rhs[g as usize] = x2[g as usize];
+                let (x1, x2) = rayon::join(|| h1.backward(xs_ref, l1), || h2.backward(xs_ref, l2));
+                for (h, x) in [(&*h1, x1), (&*h2, x2)] {
+                    for (&g, v) in h.dofs[..h.n_int].iter().zip(x) {
+                        rhs[g as usize] = v;
+                    }
                 }
                 for (k, &g) in s.sep.iter().enumerate() {
                     rhs[g as usize] = xs[k];

@@ -41,7 +41,8 @@ enum Command {
         /// Worker threads (default: all cores). Results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
-        /// Linear backend: faer-cholesky (default), faer-ldlt, faer-lu, pcg, ..., and with
+        /// Linear backend: faer-cholesky (default), faer-ldlt, faer-lu, faer-substructured
+        /// (subdomains of blocks factorized in parallel), pcg, ..., and with
         /// the cargo features of the same name mumps, mumps-spd, mumps-lu, petsc.
         #[arg(long, default_value = solve::DEFAULT)]
         solver: String,
@@ -305,8 +306,7 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             prog.stage("meshing");
             let m = mesh::build(&sc);
             check_memory(&sc, &m, memory_limit)?;
-            backend
-                .set_near_null_space(&solve::rigid_body_modes(&m))
+            solve::configure(backend.as_mut(), &m)
                 .map_err(|e| Error::new(e.to_string()).place("option --solver"))?;
             if rank != 0 {
                 analysis::run_with(
@@ -544,7 +544,7 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             let opts = solve::BackendOptions {
                 petsc_options: petsc_options.unwrap_or_default(),
             };
-            let rows = solve::bench::bench(&k, &f, &solve::rigid_body_modes(&m), &names, &opts);
+            let rows = solve::bench::bench(&k, &f, &m, &names, &opts);
             println!(
                 "{}: {} unknowns, {} stored entries, {} blocks, {} contacts; model built in {:.2} s; {} threads\n",
                 file.display(),

@@ -20,6 +20,18 @@ pub fn get(name: &str) -> Option<&'static str> {
     EXAMPLES.iter().find(|e| e.0 == name).map(|e| e.2)
 }
 
+/// The `wall` example with `n` courses of `n` bricks (0.4 m × 0.2 m), deformable bricks
+/// meshed by their corners and contact nodes (about 12 unknowns each) or rigid ones (3
+/// each): the scalable model of the solver benchmarks and tests.
+pub fn scaled_wall(n: usize, rigid: bool) -> String {
+    let kind = if rigid { "\nkind = \"rigid\"" } else { "" };
+    WALL.replace("courses = 10", &format!("courses = {n}"))
+        .replace(
+            "bricks_per_course = 5",
+            &format!("bricks_per_course = {n}{kind}"),
+        )
+}
+
 const INCLINE: &str = r#"title = "One block on a 30 degree incline (Hoek and Bray 1977; seed section 4.1)"
 # alpha = 30 > phi = 20 and b/d = 1 > tan(alpha): the block slides.
 

@@ -29,11 +29,13 @@ pub struct BenchRow {
 }
 
 /// Runs each backend of `names` once on `k x = b` (a new instance each, so every phase
-/// is timed from scratch), with the near-null space `modes` (ignored by the direct ones).
+/// is timed from scratch), each given what dfem knows of `mesh` ([`super::configure`]:
+/// the near-null space, ignored by the direct backends, and the block partition for
+/// those that ask for one).
 pub fn bench(
     k: &CsrMatrix,
     b: &[f64],
-    modes: &[Vec<f64>],
+    mesh: &crate::mesh::Mesh,
     names: &[&str],
     opts: &BackendOptions,
 ) -> Vec<BenchRow> {
@@ -51,7 +53,7 @@ pub fn bench(
                 residual: f64::NAN,
                 error: None,
             };
-            if let Err(e) = run_one(k, b, modes, name, opts, &mut row) {
+            if let Err(e) = run_one(k, b, mesh, name, opts, &mut row) {
                 row.error = Some(e);
             }
             row
@@ -62,13 +64,13 @@ pub fn bench(
 fn run_one(
     k: &CsrMatrix,
     b: &[f64],
-    modes: &[Vec<f64>],
+    mesh: &crate::mesh::Mesh,
     name: &str,
     opts: &BackendOptions,
     row: &mut BenchRow,
 ) -> Result<(), String> {
     let mut be = backend_with(name, opts).map_err(|e| e.to_string())?;
-    be.set_near_null_space(modes).map_err(|e| e.to_string())?;
+    super::configure(be.as_mut(), mesh).map_err(|e| e.to_string())?;
     let t = Instant::now();
     be.analyze(&k.pattern).map_err(|e| e.to_string())?;
     row.setup_s = t.elapsed().as_secs_f64();

@@ -93,5 +93,82 @@ pub fn rigid_body_modes(mesh: &crate::mesh::Mesh) -> Vec<Vec<f64>> {
     modes
 }
 
+/// The movable blocks partitioned into `parts` subdomains, as the part of every unknown
+/// ([`LinearBackend::set_partition`]): METIS recursive bisection
+/// ([`dfem_kernels::metis_partition_graph`]; parts numbered along the bisections, which
+/// `faer-substructured` nests its interfaces by) on the block adjacency graph — one vertex
+/// per block with unknowns, weighted by its number of unknowns (3 for a rigid block, 2
+/// per free node of a deformable one), one edge per pair of blocks joined by contacts,
+/// weighted by their number of contacts. A block's unknowns all go to one part, so every
+/// cut between parts runs along joints, and METIS keeps the contacts cut (and so the
+/// interface unknowns) few while balancing the unknowns. Fixed blocks have no unknowns
+/// and do not take part. Deterministic (METIS' fixed seed). The one place where dfem
+/// decides which subdomain a block belongs to: the substructured direct solver's
+/// subdomains and a distributed PETSc's ranks both come from here.
+pub fn block_partition(mesh: &crate::mesh::Mesh, parts: usize) -> Result<Vec<u32>, SolveError> {
+    use crate::mesh::BlockDofs;
+    // the unknowns of each block
+    let mut unknowns: Vec<Vec<u32>> = vec![Vec::new(); mesh.blocks.len()];
+    for (b, list) in mesh.blocks.iter().zip(unknowns.iter_mut()) {
+        match b.dofs {
+            BlockDofs::Fixed => {}
+            BlockDofs::Rigid { first, .. } => list.extend(first..first + 3),
+            BlockDofs::Deformable => {
+                for node in b.nodes.clone() {
+                    list.extend(
+                        mesh.node_dofs[node as usize]
+                            .iter()
+                            .copied()
+                            .filter(|&d| d != dfem_kernels::CONSTRAINED),
+                    );
+                }
+            }
+        }
+    }
+    // graph vertices: the blocks with unknowns
+    let mut vertex = vec![u32::MAX; mesh.blocks.len()];
+    let mut weights = Vec::new();
+    for (b, list) in unknowns.iter().enumerate() {
+        if !list.is_empty() {
+            vertex[b] = weights.len() as u32;
+            weights.push(list.len() as u32);
+        }
+    }
+    let edges: Vec<(u32, u32, u32)> = mesh
+        .contacts
+        .iter()
+        .map(|c| (vertex[c.block_l as usize], vertex[c.block_m as usize]))
+        .filter(|&(a, b)| a != u32::MAX && b != u32::MAX && a != b)
+        .map(|(a, b)| (a, b, 1))
+        .collect();
+    let block_part = dfem_kernels::metis_partition_graph(&weights, &edges, parts)?;
+    let mut part = vec![0u32; mesh.n_dofs];
+    for (b, list) in unknowns.iter().enumerate() {
+        if vertex[b] != u32::MAX {
+            let p = block_part[vertex[b] as usize];
+            for &d in list {
+                part[d as usize] = p;
+            }
+        }
+    }
+    Ok(part)
+}
+
+/// Hands `backend` what dfem knows of the structure of its matrices, before the first
+/// factorization: the blocks' rigid-body modes ([`rigid_body_modes`], the near-null
+/// space) and, if the backend asks for a partition into k parts
+/// ([`LinearBackend::partition_parts`]), the blocks' partition ([`block_partition`]).
+/// `dfem run`, `dfem bench-solvers` and the tests all go through here.
+pub fn configure(
+    backend: &mut dyn LinearBackend,
+    mesh: &crate::mesh::Mesh,
+) -> Result<(), SolveError> {
+    backend.set_near_null_space(&rigid_body_modes(mesh))?;
+    if let Some(k) = backend.partition_parts() {
+        backend.set_partition(&block_partition(mesh, k)?)?;
+    }
+    Ok(())
+}
+
 pub mod bench;
 pub mod reuse;

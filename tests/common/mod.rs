@@ -153,9 +153,7 @@ pub fn solve_with_options(sc: &Scene, name: &str, petsc_options: &str) -> (Mesh,
     };
     let mut backend =
         dfem::solve::backend_with(name, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
-    backend
-        .set_near_null_space(&dfem::solve::rigid_body_modes(&m))
-        .unwrap();
+    dfem::solve::configure(backend.as_mut(), &m).unwrap();
     let out = analysis::run(sc, &m, backend.as_mut()).unwrap_or_else(|e| panic!("{name}: {e}"));
     (m, out)
 }

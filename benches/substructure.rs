@@ -1,0 +1,356 @@
+//! Subdomain-parallel factorization (issue 11): `faer-substructured` against faer's
+//! single-thread Cholesky of the whole matrix (`faer-cholesky`, AMD) on the built-in
+//! running-bond wall (`dfem example wall`) scaled to n × n bricks, its elastic stiffness
+//! of the first solve (K of METHOD.md §2–3) and its gravity load.
+//!
+//!     cargo bench --bench substructure -- [--n 300] [--kind deformable|rigid]
+//!         [--subdomains 1,2,4] [--threads 2] [--reps 3] [--ordering metis|amd]
+//!         [--subdomain-threads 1]
+//!
+//! n = 300 deformable bricks give 1,079,402 unknowns. For each configuration: the
+//! analysis (block partition, orderings, symbolic factorizations), the first numeric
+//! factorization, the median and best of `reps` refactorizations with every value
+//! changed (all scaled by 1 + r·2⁻²⁰), one solve, and where a refactorization's time goes
+//! (thread time summed over the subdomains' sparse factorizations, over their Schur
+//! complements, and over the dense interface fronts), with the critical path in thread
+//! CPU time (`SubstructureStats::last_critical_path_seconds`: the time with a free core
+//! per subdomain, which the other jobs of a shared machine do not inflate the way they
+//! inflate the wall time). Then the reuse case of a secant
+//! iteration in which the contacts of one subdomain changed: 5 % of the contacts joining
+//! two blocks of subdomain 0 have their springs divided by 1000 (an opening joint),
+//! alternately on and off, so that each factorization sees one changed subdomain; its
+//! median time against a full refactorization. Every solution is compared with
+//! faer-cholesky's (max-norm relative difference). The tables are markdown,
+//! with the load average before and after.
+
+use dfem::analysis;
+use dfem::assembly::System;
+use dfem::solve::{block_partition, configure, LinearBackend};
+use dfem_kernels::{
+    max_relative_difference, CsrMatrix, FaerCholesky, FaerCholeskySubstructured, FillOrdering,
+};
+use std::time::Instant;
+
+fn arg(name: &str) -> Option<String> {
+    let args: Vec<String> = std::env::args().collect();
+    let k = args.iter().position(|a| a == name)?;
+    args.get(k + 1).cloned()
+}
+
+fn list(name: &str, default: &str) -> Vec<usize> {
+    arg(name)
+        .unwrap_or_else(|| default.to_string())
+        .split(',')
+        .map(|v| v.parse().unwrap_or_else(|_| panic!("{name}: {v}")))
+        .collect()
+}
+
+fn load() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .unwrap_or_default()
+        .trim()
+        .to_string()
+}
+
+/// The wall example with `n` courses of `n` bricks (rigid bricks if `rigid`).
+fn wall_scene(n: usize, rigid: bool) -> dfem::scene::Scene {
+    dfem::scene::parse_str(&dfem::scene::examples::scaled_wall(n, rigid), None)
+        .expect("scaled wall")
+}
+
+/// All values scaled by 1 + r·2⁻²⁰ (every bit pattern changes; the solution scales).
+fn scaled(k: &CsrMatrix, r: usize) -> CsrMatrix {
+    let mut a = k.clone();
+    let s = 1.0 + r as f64 * (-20f64).exp2();
+    a.values.iter_mut().for_each(|v| *v *= s);
+    a
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// CPU time (user + system) of this process so far, s (`/proc/self/stat`, in units of
+/// Linux's USER_HZ = 1/100 s); NaN where unavailable. On a loaded machine the wall times
+/// include waits for a core, the CPU times only the work done.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let fields: Vec<&str> = stat
+        .rsplit_once(')')
+        .map_or(Vec::new(), |(_, r)| r.split_whitespace().collect());
+    // after the command: state is field 3, utime 14 and stime 15 (1-based, man proc)
+    let tick = |k: usize| fields.get(k - 3).and_then(|v| v.parse::<f64>().ok());
+    match (tick(14), tick(15)) {
+        (Some(u), Some(s)) => (u + s) / 100.0,
+        _ => f64::NAN,
+    }
+}
+
+/// Wall and CPU time of `f`, s.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64, f64) {
+    let (t, c) = (Instant::now(), cpu_seconds());
+    let r = f();
+    (r, t.elapsed().as_secs_f64(), cpu_seconds() - c)
+}
+
+struct Timed {
+    analysis: f64,
+    /// Median CPU time of a refactorization, s.
+    refactor_cpu: f64,
+    first: f64,
+    refactor: f64,
+    best: f64,
+    solve: f64,
+    /// Median of `probe` after each refactorization.
+    probe: f64,
+    x: Vec<f64>,
+}
+
+/// Analysis, first factorization, `reps` full refactorizations (`probe` read after each),
+/// a solve of `k x = f`.
+fn time_backend<B: LinearBackend + ?Sized>(
+    be: &mut B,
+    k: &CsrMatrix,
+    f: &[f64],
+    reps: usize,
+    mut probe: impl FnMut(&B) -> f64,
+) -> Timed {
+    let t = Instant::now();
+    be.analyze(&k.pattern).expect("analysis");
+    let analysis = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    be.factorize(k).expect("factorization");
+    let first = t.elapsed().as_secs_f64();
+    let mut probes = Vec::new();
+    let (mut times, mut cpu): (Vec<f64>, Vec<f64>) = (1..=reps)
+        .map(|r| {
+            let a = scaled(k, r);
+            let (_, wall, cpu) = timed(|| be.factorize(&a).expect("refactorization"));
+            probes.push(probe(be));
+            (wall, cpu)
+        })
+        .unzip();
+    be.factorize(k).expect("factorization");
+    let mut x = f.to_vec();
+    let t = Instant::now();
+    be.solve(&mut x).expect("solve");
+    let solve = t.elapsed().as_secs_f64();
+    let best = times.iter().copied().fold(f64::INFINITY, f64::min);
+    Timed {
+        analysis,
+        first,
+        refactor: median(&mut times),
+        refactor_cpu: median(&mut cpu),
+        best,
+        solve,
+        probe: median(&mut probes),
+        x,
+    }
+}
+
+fn main() {
+    let n: usize = arg("--n").map_or(300, |v| v.parse().expect("--n"));
+    let rigid = arg("--kind").as_deref() == Some("rigid");
+    let reps: usize = arg("--reps").map_or(3, |v| v.parse().expect("--reps"));
+    let parts = list("--subdomains", "1,2,4");
+    let threads = list("--threads", "2");
+    let sub_threads: usize =
+        arg("--subdomain-threads").map_or(1, |v| v.parse().expect("--subdomain-threads"));
+    let ordering = match arg("--ordering").as_deref() {
+        Some("amd") => FillOrdering::Amd,
+        _ => FillOrdering::Metis,
+    };
+    println!("# load average before: {}", load());
+    let t = Instant::now();
+    let sc = wall_scene(n, rigid);
+    let m = dfem::mesh::build(&sc);
+    let system = System::new(&sc, &m);
+    let springs = analysis::elastic_springs(&sc, &m);
+    let k = system.stiffness(&m, &springs);
+    let f = analysis::external_load(&sc, &m);
+    println!(
+        "# wall {n} x {n} {} bricks: {} unknowns, {} stored entries, {} blocks, {} contacts; model {:.1} s; interior ordering {ordering:?}, {sub_threads} task(s) inside each subdomain; {reps} refactorizations each\n",
+        if rigid { "rigid" } else { "deformable" },
+        k.pattern.n(),
+        k.pattern.nnz(),
+        m.blocks.len(),
+        m.contacts.len(),
+        t.elapsed().as_secs_f64()
+    );
+
+    // the reference: faer's Cholesky of the whole matrix, AMD, one thread
+    let mut faer = FaerCholesky::new();
+    let base = time_backend(&mut faer, &k, &f, reps, |_| f64::NAN);
+    let base_mb = faer.stats().factor_nnz as f64 * 8.0 / 1e6;
+    println!("| backend | subdomains | threads | interface unknowns | analysis (s) | first factorization (s) | refactorization, median (s) | best (s) | CPU time of a refactorization, median (s) | critical path, thread CPU, median (s) | solve (s) | speed-up: faer-cholesky / (refactorization + solve) | interface fronts (Γ, B) | sparse factorizations, Σ (s) | Schur complements, Σ (s) | interface fronts, Σ (s) | factor entries (M) | factor memory (MB) | work (G multiply-adds) | critical path (G) | work-bound speed-up | rel. difference to faer-cholesky |");
+    println!(
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    println!(
+        "| faer-cholesky (AMD) | 1 | 1 | 0 | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | | {:.3} | 1.00 | | | | | {:.1} | {:.0} | {:.1} | {:.1} | 1.00 | 0 |",
+        base.analysis,
+        base.first,
+        base.refactor,
+        base.best,
+        base.refactor_cpu,
+        base.solve,
+        faer.stats().factor_nnz as f64 / 1e6,
+        base_mb,
+        faer.stats().factor_flops / 1e9,
+        faer.stats().factor_flops / 1e9,
+    );
+    let base_flops = faer.stats().factor_flops;
+    let base_total = base.refactor + base.solve;
+    // the same whole factorization with METIS nested dissection: what the ordering alone gives
+    let mut metis = FaerCholesky::new().with_ordering(FillOrdering::Metis);
+    let r = time_backend(&mut metis, &k, &f, reps, |_| f64::NAN);
+    let st = metis.stats();
+    println!(
+        "| faer-cholesky-metis | 1 | 1 | 0 | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | | {:.3} | {:.2} | | | | | {:.1} | {:.0} | {:.1} | {:.1} | {:.2} | {:.1e} |",
+        r.analysis,
+        r.first,
+        r.refactor,
+        r.best,
+        r.refactor_cpu,
+        r.solve,
+        base_total / (r.refactor + r.solve),
+        st.factor_nnz as f64 / 1e6,
+        st.factor_nnz as f64 * 8.0 / 1e6,
+        st.factor_flops / 1e9,
+        st.factor_flops / 1e9,
+        base_flops / st.factor_flops,
+        max_relative_difference(&r.x, &base.x)
+    );
+    drop(metis);
+    let mut reuse_rows = Vec::new();
+    for &kp in &parts {
+        let part = block_partition(&m, kp).expect("block partition");
+        for &nt in &threads {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(nt)
+                .build()
+                .expect("pool");
+            pool.install(|| {
+                let mut be = FaerCholeskySubstructured::new()
+                    .with_subdomains(kp)
+                    .with_ordering(ordering)
+                    .with_subdomain_threads(sub_threads);
+                configure(&mut be, &m).expect("configure");
+                let r = time_backend(&mut be, &k, &f, reps, |b| {
+                    b.substructure_stats().last_critical_path_seconds
+                });
+                let ss = be.substructure_stats().clone();
+                let nf = (reps + 2) as f64;
+                println!(
+                    "| faer-substructured | {kp} | {nt} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.3} | {:.3} | {:.2} | {} | {:.3} | {:.3} | {:.3} | {:.1} | {:.0} | {:.1} | {:.1} | {:.2} | {:.1e} |",
+                    ss.interface_size,
+                    r.analysis,
+                    r.first,
+                    r.refactor,
+                    r.best,
+                    r.refactor_cpu,
+                    r.probe,
+                    r.solve,
+                    base_total / (r.refactor + r.solve),
+                    ss.front_sizes
+                        .iter()
+                        .map(|(o, b)| format!("({o}, {b})"))
+                        .collect::<Vec<_>>()
+                        .join(" "),
+                    ss.subdomain_factor_seconds / nf,
+                    ss.schur_seconds / nf,
+                    ss.interface_seconds / nf,
+                    be.stats().factor_nnz as f64 / 1e6,
+                    be.stats().memory_bytes as f64 / 1e6,
+                    be.stats().factor_flops / 1e9,
+                    ss.critical_path_flops / 1e9,
+                    base_flops
+                        / (be.stats().factor_flops / nt as f64).max(ss.critical_path_flops),
+                    max_relative_difference(&r.x, &base.x)
+                );
+                if kp < 2 {
+                    return;
+                }
+                // reuse: 5 % of the contacts inside subdomain 0 open
+                let block_part = |b: u32| {
+                    let blk = &m.blocks[b as usize];
+                    let node = blk.nodes.start as usize;
+                    match blk.dofs {
+                        dfem::mesh::BlockDofs::Rigid { first, .. } => Some(part[first as usize]),
+                        _ => {
+                            let d = m.node_dofs[node][0];
+                            (d != dfem_kernels::CONSTRAINED).then(|| part[d as usize])
+                        }
+                    }
+                };
+                let inside: Vec<usize> = (0..m.contacts.len())
+                    .filter(|&c| {
+                        let ct = &m.contacts[c];
+                        block_part(ct.block_l) == Some(0) && block_part(ct.block_m) == Some(0)
+                    })
+                    .collect();
+                let mut opened = springs.clone();
+                for &c in inside.iter().step_by(20) {
+                    opened[c].kn *= 1e-3;
+                    opened[c].ks *= 1e-3;
+                }
+                let k2 = system.stiffness(&m, &opened);
+                let mut times = Vec::new();
+                let before = be.substructure_stats().subdomain_factorizations;
+                let mut cpu = Vec::new();
+                let mut path = Vec::new();
+                for r in 0..2 * reps {
+                    let a = if r % 2 == 0 { &k2 } else { &k };
+                    let (_, wall, c) = timed(|| be.factorize(a).expect("refactorization"));
+                    times.push(wall);
+                    cpu.push(c);
+                    path.push(be.substructure_stats().last_critical_path_seconds);
+                }
+                let refactored = be.substructure_stats().subdomain_factorizations - before;
+                let fronts = be.substructure_stats().last_fronts;
+                let work = be.substructure_stats().last_flops;
+                be.factorize(&k2).expect("factorization");
+                let mut x = f.clone();
+                be.solve(&mut x).expect("solve");
+                let mut xf = f.clone();
+                faer.factorize(&k2).expect("faer");
+                faer.solve(&mut xf).expect("faer");
+                let t_one = median(&mut times);
+                let c_one = median(&mut cpu);
+                let p_one = median(&mut path);
+                reuse_rows.push(format!(
+                    "| {kp} | {nt} | {} | {:.2} | {fronts} | {} | {:.3} | {:.3} | {:.0} % | {:.3} | {:.0} % | {:.0} % | {:.0} % | {:.3} | {:.0} % | {:.0} % | {:.1} | {:.0} % | {:.0} % | {:.1e} |",
+                    inside.len().div_ceil(20),
+                    refactored as f64 / (2 * reps) as f64,
+                    ss.interface_size,
+                    t_one,
+                    r.refactor,
+                    100.0 * t_one / r.refactor,
+                    base.refactor,
+                    100.0 * t_one / base.refactor,
+                    100.0 * c_one / r.refactor_cpu,
+                    100.0 * c_one / base.refactor_cpu,
+                    p_one,
+                    100.0 * p_one / r.probe,
+                    100.0 * p_one / base.refactor_cpu,
+                    work / 1e9,
+                    100.0 * work / be.stats().factor_flops,
+                    100.0 * work / base_flops,
+                    max_relative_difference(&x, &xf)
+                ));
+            });
+        }
+    }
+    println!(
+        "\nOne subdomain changed (a secant iteration in which contacts of subdomain 0 open):\n"
+    );
+    println!("| subdomains | threads | contacts changed | subdomains refactorized per factorization | fronts recomputed | interface unknowns | factorization, median (s) | full refactorization, same backend (s) | ratio | faer-cholesky refactorization (s) | ratio | CPU-time ratio to the full refactorization | CPU-time ratio to faer-cholesky | critical path, thread CPU (s) | its ratio to the full refactorization's | its ratio to faer-cholesky's CPU time | work recomputed (G multiply-adds) | work ratio to the full refactorization | work ratio to faer-cholesky | rel. difference to faer-cholesky |");
+    println!(
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    for r in reuse_rows {
+        println!("{r}");
+    }
+    println!("\n# load average after: {}", load());
+}

@@ -24,7 +24,7 @@ pub mod ordering;
 pub mod pcg;
 pub mod split;
 
-pub use assembly::{AssemblyPlan, Connectivity, CONSTRAINED};
+pub use assembly::{unpack_symmetric, AssemblyPlan, Connectivity, Form, CONSTRAINED};
 pub use backend::{backend_from_name, same_bits, LinearBackend, SolveError, SolverStats, BACKENDS};
 pub use csr::{CsrMatrix, CsrPattern};
 pub use faer_backend::{FaerCholesky, FaerLdlt, FaerLu};

@@ -1,24 +1,80 @@
-//! Deterministic parallel assembly of symmetric sparse matrices and vectors.
+//! Deterministic parallel assembly of sparse matrices and vectors: every element matrix is
+//! added straight into the CSR values, in a fixed colour order.
 //!
 //! An [`AssemblyPlan`] is computed once per topology (element → dof map). It owns the
-//! [`CsrPattern`] and two gather maps: for every stored matrix entry (and every vector
-//! entry) the list of positions in an element buffer that add into it, in a fixed order
-//! (ascending element, then ascending local slot). Assembly is then two parallel passes:
-//! the element kernels fill their dense blocks of one big buffer, and every entry sums
-//! its contributions in the fixed order. No atomics, no locks, and the floating-point
-//! result is bit-identical for any number of threads.
+//! [`CsrPattern`] and a *scatter map*: for every element, the position in the value array
+//! of each entry of its element matrix (4 bytes each), or, for an element whose unknowns
+//! come in pairs (x, y of a node: dofs d, d + 1 with rows of the same columns), one
+//! position per 2×2 block and one row length per pair (12 numbers for a CST triangle
+//! instead of 36). The elements are cut into chunks of
+//! [`ELEM_CHUNK`] consecutive elements, and the chunks are coloured so that no two chunks
+//! of one colour share an unknown (hence no matrix entry). An assembly runs the colours
+//! one after the other; the chunks of one colour run in parallel (rayon), each on one
+//! thread, element by element in ascending order, and each element's matrix is evaluated
+//! into a small buffer in cache and added into the values at once. The additions into any
+//! entry therefore come in one fixed order (colour, then element, then slot) whatever the
+//! number of threads and however rayon splits the work: the result is bit-identical for
+//! any thread count, with no atomics, no locks, no element buffer and no gather pass. The
+//! first addition into each entry is a store (a flag bit of its scatter position), so the
+//! values need no zeroing pass either.
+//!
+//! Elements may be split into *groups* (consecutive ranges: say the triangles of the
+//! blocks, then the contacts): the colours of group 0 all run before those of group 1, and
+//! so on. A matrix can then be assembled in parts whose sum is bit-identical to the whole
+//! ([`AssemblyPlan::assemble_groups`] onto a base holding the earlier groups), and a few
+//! changed elements can be re-assembled alone ([`AssemblyPlan::reassemble`]).
+//!
+//! Why hand-written rather than a crate: faer's `SparseColMat::new_from_argsort` sums
+//! triplets through an argsort (8-byte indices and a value per triplet: the byte traffic
+//! of the element-buffer design this replaces, benches/assembly.rs), and no crate offers
+//! deterministic colour-ordered scatter into a fixed CSR pattern.
 
 use crate::csr::{CsrMatrix, CsrPattern, ROW_CHUNK};
 use rayon::prelude::*;
-use std::sync::{Arc, Mutex};
+use std::ops::Range;
+use std::sync::{Arc, OnceLock};
 
 /// A dof slot that is not an unknown (for example a fixed support): the rows and columns
 /// of an element matrix (and the entries of an element vector) at such a slot are
 /// dropped during assembly.
 pub const CONSTRAINED: u32 = u32::MAX;
 
-/// Number of elements handled by one rayon task when the element kernels run. Fixed.
-const ELEM_CHUNK: usize = 256;
+/// Number of consecutive elements in one chunk (the unit of work of one thread, and of
+/// the colouring). Fixed, so that nothing depends on the thread count.
+pub const ELEM_CHUNK: usize = 2048;
+
+/// Flag bit of a scatter position: this slot makes the first addition into its entry
+/// (in the fixed order of a whole assembly), so it stores instead of adding.
+const FIRST: u32 = 1 << 31;
+/// Mask of the position bits of a scatter position.
+const POS: u32 = FIRST - 1;
+/// Scatter position of a slot pair with a [`CONSTRAINED`] row or column.
+const SKIP: u32 = u32::MAX;
+
+/// How an element kernel hands over its matrix, and how it is added into the result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Form {
+    /// The kernel writes the upper triangle of a symmetric m×m matrix, packed by rows:
+    /// (0,0), (0,1), …, (0,m−1), (1,1), …, (m−1,m−1) (m(m+1)/2 values). Each value goes
+    /// into both (i, j) and (j, i), so the result is symmetric to the bit.
+    Packed,
+    /// The kernel writes a full row-major m×m matrix, symmetric up to round-off; entries
+    /// (a, b) and (b, a) both receive ½(K_ab + K_ba), so the result is symmetric to the bit.
+    Symmetrised,
+    /// The kernel writes a full row-major m×m matrix, added as it is (an unsymmetric
+    /// tangent, for an LU backend).
+    Unsymmetric,
+}
+
+impl Form {
+    /// Length of the element buffer for an element with `m` dof slots.
+    pub fn buffer_len(self, m: usize) -> usize {
+        match self {
+            Form::Packed => m * (m + 1) / 2,
+            Form::Symmetrised | Form::Unsymmetric => m * m,
+        }
+    }
+}
 
 /// Element → dof connectivity in compressed form: element `e` has the dof slots
 /// `dofs[ptr[e]..ptr[e + 1]]` (global unknown numbers, or [`CONSTRAINED`]).
@@ -63,53 +119,72 @@ impl Connectivity {
     pub fn dofs(&self, e: usize) -> &[u32] {
         &self.dofs[self.ptr[e]..self.ptr[e + 1]]
     }
+
+    /// Number of dof slots of element `e`.
+    fn slots(&self, e: usize) -> usize {
+        self.ptr[e + 1] - self.ptr[e]
+    }
 }
 
-/// Pattern and scatter/gather maps for one topology; see the module documentation.
+/// Pattern, scatter map and colour order for one topology; see the module documentation.
 #[derive(Debug)]
 pub struct AssemblyPlan {
     pattern: Arc<CsrPattern>,
     conn: Connectivity,
-    /// Offset of element e's dense ne×ne block in the matrix element buffer (len n_el + 1).
-    mat_offset: Vec<usize>,
-    /// Offset of element e's ne-vector in the vector element buffer (len n_el + 1).
-    vec_offset: Vec<usize>,
-    /// For CSR entry k, its contributions are `gather_pos[gather_ptr[k]..gather_ptr[k + 1]]`.
-    gather_ptr: Vec<usize>,
-    gather_pos: Vec<usize>,
-    /// For unknown i, its vector contributions are `vgather_pos[vgather_ptr[i]..vgather_ptr[i + 1]]`.
-    vgather_ptr: Vec<usize>,
-    vgather_pos: Vec<usize>,
-    /// For CSR entry k = (i, j), the position of (j, i).
-    transpose: Vec<usize>,
-    /// Buffers reused by every assembly with this plan, so that an assembly allocates
-    /// nothing: on a wall of 786,080 triangles a fresh 242 MB element buffer and a fresh
-    /// array of sums per assembly spent more time in page faults than in the kernels
-    /// (benches/assembly.rs: 0.274 s per assembly on 2 threads before, see
-    /// docs/performance.md "Assembly").
-    scratch: Mutex<Scratch>,
+    /// Group g is the elements `group_start[g]..group_start[g + 1]`.
+    group_start: Vec<usize>,
+    /// Chunk c is the elements `chunk_start[c]..chunk_start[c + 1]`; its elements' scatter
+    /// maps follow one another from `map[chunk_map[c]]`.
+    chunk_start: Vec<usize>,
+    chunk_map: Vec<usize>,
+    /// Colour of every chunk; colours are numbered in the order they run (group by group).
+    chunk_colour: Vec<u32>,
+    /// The chunks of colour k are `colour_chunks[colour_ptr[k]..colour_ptr[k + 1]]`.
+    colour_ptr: Vec<usize>,
+    colour_chunks: Vec<u32>,
+    /// The colours of group g are `group_colour[g]..group_colour[g + 1]`.
+    group_colour: Vec<usize>,
+    /// Whether element e's map is paired (see `map`).
+    paired: Vec<bool>,
+    /// The scatter maps of the elements, one after the other. A *general* map (m slots)
+    /// has one position per slot pair, m² of them, in the order (0,0), (0,1), (1,0), (0,2),
+    /// (2,0), …, (1,1), (1,2), (2,1), …: each diagonal pair, then each pair right of it
+    /// followed by its mirror. A *paired* map (slots 2i, 2i + 1 hold dofs d, d + 1, the
+    /// rows d and d + 1 have the same columns, the unknowns are distinct and the four
+    /// entries of every 2×2 block get their first addition from the same element) has
+    /// the n = m/2 row lengths of rows dofs[2i], then one position per block, the
+    /// position of entry (dofs[2i], dofs[2j]), in the same order over the n nodes: the
+    /// block's other entries are at +1, + row length and + row length + 1. Bit 31 of a
+    /// position is [`FIRST`]; [`SKIP`] for a constrained slot.
+    map: Vec<u32>,
+    /// Entries into which no element adds (the diagonal of an unknown no element
+    /// touches): every assembly zeroes them.
+    untouched: Vec<u32>,
+    /// `first_in_group[g]`: the entries whose first addition comes from group g (empty
+    /// for g = 0); an assembly that stops before group g zeroes them.
+    first_in_group: Vec<Vec<u32>>,
+    /// dof → elements touching it (ascending), built by the first [`Self::reassemble`].
+    adjacency: OnceLock<(Vec<usize>, Vec<u32>)>,
 }
 
-/// See [`AssemblyPlan`]'s `scratch`.
-#[derive(Debug, Default)]
-struct Scratch {
-    /// Element matrices (`mat_offset`) and element vectors (`vec_offset`).
-    mat: Vec<f64>,
-    vec: Vec<f64>,
-    /// Every stored entry's sum of contributions (the symmetric assembly averages it
-    /// with its transpose's).
-    sums: Vec<f64>,
-}
+/// The value array of the matrix being assembled, shared by the threads of one colour.
+/// Chunks of one colour share no unknown, so no two threads ever touch the same entry.
+#[derive(Clone, Copy)]
+struct SharedValues(*mut f64);
+// SAFETY: see the type's documentation: concurrent accesses are to disjoint entries.
+unsafe impl Send for SharedValues {}
+unsafe impl Sync for SharedValues {}
 
-/// What one chunk of rows contributes while the plan is built.
-#[derive(Default)]
-struct RowChunk {
-    row_len: Vec<usize>,
-    cols: Vec<u32>,
-    gather_len: Vec<usize>,
-    gather_pos: Vec<usize>,
-    vgather_len: Vec<usize>,
-    vgather_pos: Vec<usize>,
+impl SharedValues {
+    /// Pointer to entry `k` (a method, so that closures capture the whole `Sync` wrapper).
+    ///
+    /// # Safety
+    /// `k` is within the array.
+    #[inline(always)]
+    unsafe fn at(self, k: usize) -> *mut f64 {
+        // SAFETY: as the function's contract
+        unsafe { self.0.add(k) }
+    }
 }
 
 fn prefix_sum(lens: impl Iterator<Item = usize>) -> Vec<usize> {
@@ -122,172 +197,180 @@ fn prefix_sum(lens: impl Iterator<Item = usize>) -> Vec<usize> {
     out
 }
 
+/// Calls `f(pair, a, b)` for the slot pairs of an m×m element matrix in scatter order
+/// (see [`AssemblyPlan`]'s `scatter`).
+fn for_pairs(m: usize, mut f: impl FnMut(usize, usize, usize)) {
+    let mut s = 0;
+    for a in 0..m {
+        f(s, a, a);
+        s += 1;
+        for b in a + 1..m {
+            f(s, a, b);
+            f(s + 1, b, a);
+            s += 2;
+        }
+    }
+}
+
 impl AssemblyPlan {
-    /// Pattern + scatter/gather maps, computed once per topology (parallel over fixed
-    /// chunks of rows). Every unknown `0..n_dofs` gets a diagonal entry, even when no
-    /// element touches it.
+    /// Pattern, scatter map and colouring for one group of elements; see
+    /// [`Self::with_groups`].
+    pub fn new(n_dofs: usize, conn: &Connectivity) -> Self {
+        Self::with_groups(n_dofs, conn, &[conn.len()])
+    }
+
+    /// Pattern, scatter map and colouring, computed once per topology. `group_ends`:
+    /// the element index at which each group ends (increasing, the last one
+    /// `conn.len()`); the groups' colours run in this order. Every unknown `0..n_dofs`
+    /// gets a diagonal entry, even when no element touches it.
     ///
     /// # Panics
-    /// If a dof slot is neither [`CONSTRAINED`] nor below `n_dofs`, or `n_dofs >= u32::MAX`.
-    pub fn new(n_dofs: usize, conn: &Connectivity) -> Self {
+    /// If a dof slot is neither [`CONSTRAINED`] nor below `n_dofs`, if `n_dofs >=
+    /// u32::MAX`, if the pattern has 2³¹ − 1 entries or more (the scatter map holds
+    /// 31-bit positions), or if `group_ends` is not as described.
+    pub fn with_groups(n_dofs: usize, conn: &Connectivity, group_ends: &[usize]) -> Self {
         assert!(n_dofs < u32::MAX as usize, "too many unknowns");
         let n_el = conn.len();
-        let ne = |e: usize| conn.ptr[e + 1] - conn.ptr[e];
-        let mat_offset = prefix_sum((0..n_el).map(|e| ne(e) * ne(e)));
-        let vec_offset = conn.ptr.clone();
+        assert!(
+            group_ends.last() == Some(&n_el) && group_ends.windows(2).all(|w| w[0] <= w[1]),
+            "group ends {group_ends:?} must increase to the number of elements, {n_el}"
+        );
+        let pattern = Arc::new(build_pattern(n_dofs, conn));
+        assert!(
+            pattern.nnz() < POS as usize,
+            "{} stored entries: the scatter map holds 31-bit positions",
+            pattern.nnz()
+        );
+        let mut group_start = vec![0];
+        group_start.extend_from_slice(group_ends);
 
-        // dof -> elements (ascending, without repeats)
-        let mut count = vec![0usize; n_dofs + 1];
-        for e in 0..n_el {
-            for (a, &d) in conn.dofs(e).iter().enumerate() {
-                if d == CONSTRAINED {
-                    continue;
-                }
-                assert!(
-                    (d as usize) < n_dofs,
-                    "element {e} slot {a}: dof {d} >= n_dofs = {n_dofs}"
-                );
-                // count once per element: skip if the same dof appeared earlier in e
-                if !conn.dofs(e)[..a].contains(&d) {
-                    count[d as usize + 1] += 1;
-                }
+        // chunks of ELEM_CHUNK elements, never across a group boundary
+        let mut chunk_start = vec![0];
+        for g in 0..group_ends.len() {
+            let mut e = group_start[g];
+            while e < group_start[g + 1] {
+                e = (e + ELEM_CHUNK).min(group_start[g + 1]);
+                chunk_start.push(e);
             }
         }
-        for i in 0..n_dofs {
-            count[i + 1] += count[i];
-        }
-        let de_ptr = count;
-        let mut fill = de_ptr.clone();
-        let mut de = vec![0u32; de_ptr[n_dofs]];
-        for e in 0..n_el {
-            let dofs = conn.dofs(e);
-            for (a, &d) in dofs.iter().enumerate() {
-                if d != CONSTRAINED && !dofs[..a].contains(&d) {
-                    de[fill[d as usize]] = e as u32;
-                    fill[d as usize] += 1;
-                }
-            }
+        let n_chunks = chunk_start.len() - 1;
+        let (chunk_colour, group_colour) = colour_chunks(n_dofs, conn, &group_start, &chunk_start);
+        let n_colours = group_colour[group_colour.len() - 1];
+        let colour_ptr = prefix_sum(
+            (0..n_colours).map(|k| chunk_colour.iter().filter(|&&c| c as usize == k).count()),
+        );
+        let mut colour_chunks = vec![0u32; n_chunks];
+        let mut fill = colour_ptr.clone();
+        for (c, &k) in chunk_colour.iter().enumerate() {
+            colour_chunks[fill[k as usize]] = c as u32;
+            fill[k as usize] += 1;
         }
 
-        let n_chunks = n_dofs.div_ceil(ROW_CHUNK);
-        let chunks: Vec<RowChunk> = (0..n_chunks)
-            .into_par_iter()
-            .map(|c| {
-                let mut out = RowChunk::default();
-                let mut pairs: Vec<(u32, usize)> = Vec::new();
-                for i in c * ROW_CHUNK..((c + 1) * ROW_CHUNK).min(n_dofs) {
-                    let elems = &de[de_ptr[i]..de_ptr[i + 1]];
-                    let start = out.cols.len();
-                    out.cols.push(i as u32);
-                    for &e in elems {
-                        out.cols.extend(
-                            conn.dofs(e as usize)
-                                .iter()
-                                .copied()
-                                .filter(|&d| d != CONSTRAINED),
-                        );
-                    }
-                    let row = &mut out.cols[start..];
-                    row.sort_unstable();
-                    let mut len = 0;
-                    for k in 0..row.len() {
-                        if k == 0 || row[k] != row[len - 1] {
-                            row[len] = row[k];
-                            len += 1;
-                        }
-                    }
-                    out.cols.truncate(start + len);
-                    out.row_len.push(len);
-                    let cols = &out.cols[start..];
-
-                    pairs.clear();
-                    let mut vlen = 0;
-                    for &e in elems {
-                        let e = e as usize;
-                        let dofs = conn.dofs(e);
-                        let m = dofs.len();
-                        for (a, &da) in dofs.iter().enumerate() {
-                            if da as usize != i {
-                                continue;
-                            }
-                            out.vgather_pos.push(vec_offset[e] + a);
-                            vlen += 1;
-                            for (b, &db) in dofs.iter().enumerate() {
-                                if db == CONSTRAINED {
-                                    continue;
-                                }
-                                let k = cols.binary_search(&db).expect("column in row") as u32;
-                                pairs.push((k, mat_offset[e] + a * m + b));
-                            }
-                        }
-                    }
-                    out.vgather_len.push(vlen);
-                    pairs.sort_unstable();
-                    let mut k_cur = 0u32;
-                    let mut run = 0usize;
-                    for &(k, pos) in &pairs {
-                        while k_cur < k {
-                            out.gather_len.push(run);
-                            run = 0;
-                            k_cur += 1;
-                        }
-                        run += 1;
-                        out.gather_pos.push(pos);
-                    }
-                    while (k_cur as usize) < len {
-                        out.gather_len.push(run);
-                        run = 0;
-                        k_cur += 1;
-                    }
-                }
-                out
-            })
-            .collect();
-
-        let row_ptr = prefix_sum(chunks.iter().flat_map(|c| c.row_len.iter().copied()));
-        let mut col_idx = Vec::with_capacity(row_ptr[n_dofs]);
-        let gather_ptr = prefix_sum(chunks.iter().flat_map(|c| c.gather_len.iter().copied()));
-        let mut gather_pos = Vec::with_capacity(gather_ptr[gather_ptr.len() - 1]);
-        let vgather_ptr = prefix_sum(chunks.iter().flat_map(|c| c.vgather_len.iter().copied()));
-        let mut vgather_pos = Vec::with_capacity(vgather_ptr[n_dofs]);
-        for c in &chunks {
-            col_idx.extend_from_slice(&c.cols);
-            gather_pos.extend_from_slice(&c.gather_pos);
-            vgather_pos.extend_from_slice(&c.vgather_pos);
-        }
-        debug_assert_eq!(gather_ptr.len(), col_idx.len() + 1);
-        let pattern = Arc::new(CsrPattern::from_parts_unchecked(n_dofs, row_ptr, col_idx));
-        let mut transpose = vec![0usize; pattern.nnz()];
-        {
-            let rp = pattern.row_ptr();
-            let ci = pattern.col_idx();
-            transpose
-                .par_chunks_mut(ROW_CHUNK)
-                .enumerate()
-                .for_each(|(c, chunk)| {
-                    let k0 = c * ROW_CHUNK;
-                    // row of the first entry of the chunk
-                    let mut i = rp.partition_point(|&x| x <= k0) - 1;
-                    for (j, t) in chunk.iter_mut().enumerate() {
-                        let k = k0 + j;
-                        while rp[i + 1] <= k {
-                            i += 1;
-                        }
-                        *t = pattern.find(ci[k] as usize, i).expect("symmetric pattern");
+        // general maps of every element, in parallel over chunks
+        let chunk_general = prefix_sum((0..n_chunks).map(|c| {
+            (chunk_start[c]..chunk_start[c + 1])
+                .map(|e| conn.slots(e).pow(2))
+                .sum()
+        }));
+        let mut general = vec![SKIP; chunk_general[n_chunks]];
+        for_chunk_pieces(&mut general, &chunk_general, |c, piece| {
+            let mut s = 0;
+            for e in chunk_start[c]..chunk_start[c + 1] {
+                let dofs = conn.dofs(e);
+                let m = dofs.len();
+                for_pairs(m, |k, a, b| {
+                    let (i, j) = (dofs[a], dofs[b]);
+                    if i != CONSTRAINED && j != CONSTRAINED {
+                        let p = pattern
+                            .find(i as usize, j as usize)
+                            .expect("entry in pattern");
+                        piece[s + k] = p as u32;
                     }
                 });
+                s += m * m;
+            }
+        });
+
+        // flag the first addition into every entry, in the order of a whole assembly
+        let nnz = pattern.nnz();
+        let mut seen = vec![false; nnz];
+        let mut first_in_group = vec![Vec::new(); group_ends.len()];
+        for g in 0..group_ends.len() {
+            for &c in &colour_chunks[colour_ptr[group_colour[g]]..colour_ptr[group_colour[g + 1]]] {
+                let c = c as usize;
+                for p in &mut general[chunk_general[c]..chunk_general[c + 1]] {
+                    if *p != SKIP && !seen[*p as usize] {
+                        seen[*p as usize] = true;
+                        if g > 0 {
+                            first_in_group[g].push(*p);
+                        }
+                        *p |= FIRST;
+                    }
+                }
+            }
         }
+        let untouched = (0..nnz as u32).filter(|&k| !seen[k as usize]).collect();
+
+        // paired maps where they apply
+        let paired: Vec<bool> = (0..n_chunks)
+            .into_par_iter()
+            .flat_map_iter(|c| {
+                let mut g = chunk_general[c];
+                (chunk_start[c]..chunk_start[c + 1]).map(move |e| {
+                    let m = conn.slots(e);
+                    g += m * m;
+                    (e, g - m * m, m)
+                })
+            })
+            .map(|(e, g, m)| is_paired(&pattern, conn.dofs(e), &general[g..g + m * m]))
+            .collect();
+        let chunk_map = prefix_sum((0..n_chunks).map(|c| {
+            (chunk_start[c]..chunk_start[c + 1])
+                .map(|e| map_len(conn.slots(e), paired[e]))
+                .sum()
+        }));
+        let mut map = vec![SKIP; chunk_map[n_chunks]];
+        for_chunk_pieces(&mut map, &chunk_map, |c, piece| {
+            let (mut s, mut g) = (0, chunk_general[c]);
+            for e in chunk_start[c]..chunk_start[c + 1] {
+                let dofs = conn.dofs(e);
+                let m = dofs.len();
+                let gen = &general[g..g + m * m];
+                let out = &mut piece[s..s + map_len(m, paired[e])];
+                if paired[e] {
+                    let n = m / 2;
+                    let (lens, blocks) = out.split_at_mut(n);
+                    for (i, l) in lens.iter_mut().enumerate() {
+                        *l = pattern.row_cols(dofs[2 * i] as usize).len() as u32;
+                    }
+                    let mut k = 0;
+                    for_pairs(n, |_, i, j| {
+                        blocks[k] = gen[general_index(m, 2 * i, 2 * j)];
+                        k += 1;
+                    });
+                } else {
+                    out.copy_from_slice(gen);
+                }
+                s += out.len();
+                g += m * m;
+            }
+        });
+
         Self {
-            transpose,
             pattern,
             conn: conn.clone(),
-            mat_offset,
-            vec_offset,
-            gather_ptr,
-            gather_pos,
-            vgather_ptr,
-            vgather_pos,
-            scratch: Mutex::new(Scratch::default()),
+            group_start,
+            chunk_start,
+            chunk_map,
+            chunk_colour,
+            colour_ptr,
+            colour_chunks,
+            group_colour,
+            paired,
+            map,
+            untouched,
+            first_in_group,
+            adjacency: OnceLock::new(),
         }
     }
 
@@ -311,36 +394,76 @@ impl AssemblyPlan {
         &self.conn
     }
 
-    /// Assembles a symmetric matrix: `kernel(e, out)` fills element e's dense row-major
-    /// ne×ne matrix (ne = number of dof slots of e, including [`CONSTRAINED`] ones, whose
-    /// rows and columns are then dropped); `out` is zeroed before the call.
-    /// The element kernels run in parallel (rayon); each matrix entry then sums its
-    /// contributions in a fixed order, so the result is bit-identical for any number of
-    /// threads. The result is made exactly symmetric: entries (i, j) and (j, i) both get
-    /// ½ (sum into (i, j) + sum into (j, i)), so that element matrices that are symmetric
-    /// only up to rounding still give a matrix whose triangles agree to the bit (the
-    /// direct backends read only one triangle). All values of `out` are overwritten.
+    /// Number of element groups.
+    pub fn n_groups(&self) -> usize {
+        self.group_start.len() - 1
+    }
+
+    /// The elements of group `g`.
+    pub fn group(&self, g: usize) -> Range<usize> {
+        self.group_start[g]..self.group_start[g + 1]
+    }
+
+    /// Number of colours of group `g` (how many times an assembly of the group waits for
+    /// all threads).
+    pub fn n_colours(&self, g: usize) -> usize {
+        self.group_colour[g + 1] - self.group_colour[g]
+    }
+
+    /// Length of group `g`'s scatter maps (4-byte numbers).
+    pub fn map_len(&self, g: usize) -> usize {
+        let c0 = self.chunk_of(self.group_start[g]);
+        let c1 = self.chunk_of(self.group_start[g + 1]);
+        self.chunk_map[c1] - self.chunk_map[c0]
+    }
+
+    /// Number of group `g`'s elements with a paired scatter map.
+    pub fn n_paired(&self, g: usize) -> usize {
+        self.paired[self.group(g)].iter().filter(|&&p| p).count()
+    }
+
+    /// Number of stored entries into which group `g`'s elements add.
+    pub fn entries_of_group(&self, g: usize) -> usize {
+        let mut seen = vec![false; self.pattern.nnz()];
+        let mut pos = Vec::new();
+        for e in self.group(g) {
+            self.general_map(e, &mut pos);
+            for &p in &pos {
+                if p != SKIP {
+                    seen[(p & POS) as usize] = true;
+                }
+            }
+        }
+        seen.iter().filter(|&&s| s).count()
+    }
+
+    /// The chunk that starts at element `e` (or the end, for `e = n_elements`).
+    fn chunk_of(&self, e: usize) -> usize {
+        self.chunk_start.partition_point(|&s| s < e)
+    }
+
+    /// Assembles a symmetric matrix from element matrices symmetric up to round-off:
+    /// `kernel(e, out)` fills element e's dense row-major m×m matrix (m = number of dof
+    /// slots of e, including [`CONSTRAINED`] ones, whose rows and columns are dropped);
+    /// `out` is zeroed before the call. Entries (a, b) and (b, a) of an element both add
+    /// ½(K_ab + K_ba), so the result is symmetric to the bit (the direct backends read only
+    /// one triangle). Bit-identical for any number of threads; all values of `out` are
+    /// overwritten.
     ///
     /// # Panics
     /// If `out` does not use this plan's pattern.
     pub fn assemble<F: Fn(usize, &mut [f64]) + Sync>(&self, kernel: F, out: &mut CsrMatrix) {
-        self.check_pattern(out);
-        let mut scratch = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        let Scratch { mat, sums, .. } = &mut *scratch;
-        fill_element_buffer(&self.mat_offset, &kernel, mat);
-        sums.resize(self.pattern.nnz(), 0.0);
-        gather(&self.gather_ptr, &self.gather_pos, mat, sums);
-        let t = &self.transpose;
-        out.values
-            .par_chunks_mut(ROW_CHUNK)
-            .enumerate()
-            .for_each(|(c, chunk)| {
-                let k0 = c * ROW_CHUNK;
-                for (j, v) in chunk.iter_mut().enumerate() {
-                    let k = k0 + j;
-                    *v = 0.5 * (sums[k] + sums[t[k]]);
-                }
-            });
+        self.assemble_groups(Form::Symmetrised, 0..self.n_groups(), None, kernel, out);
+    }
+
+    /// Assembles a symmetric matrix from the packed upper triangles of its element
+    /// matrices ([`Form::Packed`]): half the kernel's writes, and symmetric to the bit by
+    /// construction. Otherwise as [`Self::assemble`].
+    ///
+    /// # Panics
+    /// If `out` does not use this plan's pattern.
+    pub fn assemble_packed<F: Fn(usize, &mut [f64]) + Sync>(&self, kernel: F, out: &mut CsrMatrix) {
+        self.assemble_groups(Form::Packed, 0..self.n_groups(), None, kernel, out);
     }
 
     /// Assembles a matrix whose element matrices are not symmetric (a tangent stiffness
@@ -354,15 +477,271 @@ impl AssemblyPlan {
         kernel: F,
         out: &mut CsrMatrix,
     ) {
+        self.assemble_groups(Form::Unsymmetric, 0..self.n_groups(), None, kernel, out);
+    }
+
+    /// Assembles the elements of the groups `groups` onto `base`: `out = base + Σ`
+    /// (element matrices of those groups). With `groups.start == 0`, `base` must be `None`
+    /// (the sum starts from zero); otherwise `base` must hold the result of an assembly of
+    /// the groups `0..groups.start` (any [`Form`]), and then `out` is bit-identical to an
+    /// assembly of the groups `0..groups.end` in one call: the additions into every entry
+    /// come in the same order. Entries no element of `0..groups.end` adds into are zero.
+    /// `kernel(e, buf)` fills element e's matrix in the given `form` (`buf` zeroed before
+    /// the call; [`Form::buffer_len`] values). Bit-identical for any number of threads.
+    ///
+    /// # Panics
+    /// If `out` (or `base`) does not use this plan's pattern, or `base` is given exactly
+    /// when `groups.start == 0`, or `groups` is not within `0..n_groups()`.
+    pub fn assemble_groups<F: Fn(usize, &mut [f64]) + Sync>(
+        &self,
+        form: Form,
+        groups: Range<usize>,
+        base: Option<&CsrMatrix>,
+        kernel: F,
+        out: &mut CsrMatrix,
+    ) {
         self.check_pattern(out);
-        let mut scratch = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        fill_element_buffer(&self.mat_offset, &kernel, &mut scratch.mat);
-        gather(
-            &self.gather_ptr,
-            &self.gather_pos,
-            &scratch.mat,
-            &mut out.values,
+        assert!(
+            groups.start <= groups.end && groups.end <= self.n_groups(),
+            "groups {groups:?} of {}",
+            self.n_groups()
         );
+        let values = SharedValues(out.values.as_mut_ptr());
+        match base {
+            None => {
+                assert!(groups.start == 0, "groups after the first need a base");
+                // SAFETY: the untouched entries are distinct positions within `values`
+                unsafe { zero_entries(values, &self.untouched) };
+            }
+            Some(b) => {
+                assert!(
+                    groups.start > 0,
+                    "the first group starts from zero, not a base"
+                );
+                self.check_pattern(b);
+                out.values
+                    .par_chunks_mut(ROW_CHUNK * 8)
+                    .zip(b.values.par_chunks(ROW_CHUNK * 8))
+                    .for_each(|(o, b)| o.copy_from_slice(b));
+            }
+        }
+        for later in &self.first_in_group[groups.end..] {
+            // SAFETY: distinct positions within `values`
+            unsafe { zero_entries(values, later) };
+        }
+        let colours = self.group_colour[groups.start]..self.group_colour[groups.end];
+        match form {
+            Form::Packed => self.run::<PACKED, F>(colours, &kernel, values),
+            Form::Symmetrised => self.run::<SYMMETRISED, F>(colours, &kernel, values),
+            Form::Unsymmetric => self.run::<UNSYMMETRIC, F>(colours, &kernel, values),
+        }
+    }
+
+    /// Runs the colours `colours` in order, each colour's chunks in parallel.
+    fn run<const FORM: u8, F: Fn(usize, &mut [f64]) + Sync>(
+        &self,
+        colours: Range<usize>,
+        kernel: &F,
+        values: SharedValues,
+    ) {
+        let buffer_len = |m: usize| {
+            if FORM == PACKED {
+                m * (m + 1) / 2
+            } else {
+                m * m
+            }
+        };
+        for k in colours {
+            let chunks = &self.colour_chunks[self.colour_ptr[k]..self.colour_ptr[k + 1]];
+            chunks.par_iter().for_each(|&c| {
+                let c = c as usize;
+                let mut buf = Vec::new();
+                let mut s = self.chunk_map[c];
+                for e in self.chunk_start[c]..self.chunk_start[c + 1] {
+                    let m = self.conn.slots(e);
+                    let paired = self.paired[e];
+                    let map = &self.map[s..s + map_len(m, paired)];
+                    s += map.len();
+                    // SAFETY (both scatters): chunks of one colour share no unknown, so this
+                    // thread is the only one touching these positions, all within the values
+                    if paired && m == 6 {
+                        // the CST triangle: n = 3 as a literal, so that everything unrolls
+                        let mut b = [0.0; 36];
+                        let b = &mut b[..buffer_len(6)];
+                        kernel(e, b);
+                        unsafe { scatter_paired::<FORM>(3, b, map, values) };
+                        continue;
+                    }
+                    buf.clear();
+                    buf.resize(buffer_len(m), 0.0);
+                    kernel(e, &mut buf);
+                    if paired {
+                        unsafe { scatter_paired::<FORM>(m / 2, &buf, map, values) };
+                    } else {
+                        scatter_element::<FORM, _>(m, &buf, map, |p, v| unsafe {
+                            put(values, p, v)
+                        });
+                    }
+                }
+            });
+        }
+    }
+
+    /// Re-assembles only the entries the elements `changed` add into, after their
+    /// matrices changed: `out` must hold an assembly (any path, any [`Form`] whose element
+    /// values are those of `form` for the unchanged elements) of all groups with the old
+    /// element matrices, and `base` the assembly of the groups before the first group of
+    /// a changed element (`None` when that is group 0). Every entry a changed element adds
+    /// into is recomputed from `base` and all the elements of the later groups that add
+    /// into it, in the order of a whole assembly, so `out` becomes bit-identical to a
+    /// whole assembly with the new matrices; the other entries are left as they are.
+    /// Sequential: meant for a few changed elements (a few percent of a group at most;
+    /// past that, [`Self::assemble_groups`] onto `base` is faster).
+    ///
+    /// # Panics
+    /// If `out` or `base` does not use this plan's pattern, an element is out of range,
+    /// or `base` is given exactly when a changed element is in group 0.
+    pub fn reassemble<F: Fn(usize, &mut [f64])>(
+        &self,
+        form: Form,
+        changed: &[usize],
+        base: Option<&CsrMatrix>,
+        kernel: F,
+        out: &mut CsrMatrix,
+    ) {
+        self.check_pattern(out);
+        let Some(&e_min) = changed.iter().min() else {
+            return;
+        };
+        assert!(
+            changed.iter().all(|&e| e < self.n_elements()),
+            "element out of range"
+        );
+        let g0 = self.group_start.partition_point(|&s| s <= e_min) - 1;
+        assert_eq!(
+            base.is_some(),
+            g0 > 0,
+            "a base exactly when group 0 is unchanged"
+        );
+        let (adj_ptr, adj) = self.adjacency.get_or_init(|| self.dof_elements());
+
+        // the entries to recompute
+        let nnz = self.pattern.nnz();
+        let mut marked = vec![0u64; nnz.div_ceil(64)];
+        let mut entries = Vec::new();
+        let mut pos = Vec::new();
+        for &e in changed {
+            self.general_map(e, &mut pos);
+            for &p in &pos {
+                let k = (p & POS) as usize;
+                if p != SKIP && marked[k / 64] & (1 << (k % 64)) == 0 {
+                    marked[k / 64] |= 1 << (k % 64);
+                    entries.push(k);
+                }
+            }
+        }
+        let is_marked = |p: u32| {
+            let k = (p & POS) as usize;
+            p != SKIP && marked[k / 64] & (1 << (k % 64)) != 0
+        };
+        // the elements of groups ≥ g0 that add into one of them, in assembly order
+        let mut elems: Vec<u32> = changed
+            .iter()
+            .flat_map(|&e| self.conn.dofs(e))
+            .filter(|&&d| d != CONSTRAINED)
+            .flat_map(|&d| &adj[adj_ptr[d as usize]..adj_ptr[d as usize + 1]])
+            .copied()
+            .filter(|&f| f as usize >= self.group_start[g0])
+            .collect();
+        elems.sort_unstable_by_key(|&f| (self.chunk_colour[self.chunk_of_element(f as usize)], f));
+        elems.dedup();
+        elems.retain(|&f| {
+            self.general_map(f as usize, &mut pos);
+            pos.iter().any(|&p| is_marked(p))
+        });
+
+        for &k in &entries {
+            out.values[k] = base.map_or(0.0, |b| b.values[k]);
+        }
+        let values = SharedValues(out.values.as_mut_ptr());
+        let mut buf = Vec::new();
+        for &f in &elems {
+            let f = f as usize;
+            let m = self.conn.slots(f);
+            buf.clear();
+            buf.resize(form.buffer_len(m), 0.0);
+            kernel(f, &mut buf);
+            self.general_map(f, &mut pos);
+            let pos = &pos[..];
+            let put_marked = |p: u32, v: f64| {
+                if is_marked(p) {
+                    // SAFETY: a position of the plan's pattern in `out`, one thread
+                    unsafe { put(values, p, v) }
+                }
+            };
+            match form {
+                Form::Packed => scatter_element::<PACKED, _>(m, &buf, pos, put_marked),
+                Form::Symmetrised => scatter_element::<SYMMETRISED, _>(m, &buf, pos, put_marked),
+                Form::Unsymmetric => scatter_element::<UNSYMMETRIC, _>(m, &buf, pos, put_marked),
+            }
+        }
+    }
+
+    /// The chunk holding element `e`.
+    fn chunk_of_element(&self, e: usize) -> usize {
+        self.chunk_start.partition_point(|&s| s <= e) - 1
+    }
+
+    /// Element `e`'s scatter positions as a general map (see [`AssemblyPlan`]'s `map`),
+    /// into `out`.
+    fn general_map(&self, e: usize, out: &mut Vec<u32>) {
+        let c = self.chunk_of_element(e);
+        let s = self.chunk_map[c]
+            + (self.chunk_start[c]..e)
+                .map(|f| map_len(self.conn.slots(f), self.paired[f]))
+                .sum::<usize>();
+        let m = self.conn.slots(e);
+        let map = &self.map[s..s + map_len(m, self.paired[e])];
+        out.clear();
+        if !self.paired[e] {
+            out.extend_from_slice(map);
+            return;
+        }
+        let n = m / 2;
+        let (lens, blocks) = map.split_at(n);
+        out.resize(m * m, SKIP);
+        for_pairs(m, |k, a, b| {
+            let p = blocks[general_index(n, a / 2, b / 2)];
+            let offset = (a % 2) as u32 * lens[a / 2] + (b % 2) as u32;
+            out[k] = (p & FIRST) | ((p & POS) + offset);
+        });
+    }
+
+    /// dof → elements touching it, ascending (CSR arrays).
+    fn dof_elements(&self) -> (Vec<usize>, Vec<u32>) {
+        let n = self.n_dofs();
+        let mut count = vec![0usize; n + 1];
+        let each = |f: &mut dyn FnMut(usize, u32)| {
+            for e in 0..self.n_elements() {
+                let dofs = self.conn.dofs(e);
+                for (a, &d) in dofs.iter().enumerate() {
+                    if d != CONSTRAINED && !dofs[..a].contains(&d) {
+                        f(e, d);
+                    }
+                }
+            }
+        };
+        each(&mut |_, d| count[d as usize + 1] += 1);
+        for i in 0..n {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        let mut adj = vec![0u32; count[n]];
+        each(&mut |e, d| {
+            adj[fill[d as usize]] = e as u32;
+            fill[d as usize] += 1;
+        });
+        (count, adj)
     }
 
     fn check_pattern(&self, out: &CsrMatrix) {
@@ -373,9 +752,10 @@ impl AssemblyPlan {
         );
     }
 
-    /// Assembles a vector: `kernel(e, out)` fills element e's ne-vector (zeroed before the
-    /// call; entries at [`CONSTRAINED`] slots are dropped). Same determinism guarantee as
-    /// [`Self::assemble`]. All entries of `out` are overwritten.
+    /// Assembles a vector: `kernel(e, out)` fills element e's m-vector (zeroed before the
+    /// call; entries at [`CONSTRAINED`] slots are dropped). Summed in the colour order of
+    /// the matrices, so bit-identical for any number of threads. All entries of `out` are
+    /// overwritten.
     ///
     /// # Panics
     /// If `out.len() != n_dofs`.
@@ -385,55 +765,443 @@ impl AssemblyPlan {
             self.pattern.n(),
             "the vector has the wrong length"
         );
-        let mut scratch = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        fill_element_buffer(&self.vec_offset, &kernel, &mut scratch.vec);
-        gather(&self.vgather_ptr, &self.vgather_pos, &scratch.vec, out);
+        out.fill(0.0);
+        let values = SharedValues(out.as_mut_ptr());
+        for k in 0..self.group_colour[self.n_groups()] {
+            let chunks = &self.colour_chunks[self.colour_ptr[k]..self.colour_ptr[k + 1]];
+            chunks.par_iter().for_each(|&c| {
+                let mut buf = Vec::new();
+                for e in self.chunk_start[c as usize]..self.chunk_start[c as usize + 1] {
+                    let dofs = self.conn.dofs(e);
+                    buf.clear();
+                    buf.resize(dofs.len(), 0.0);
+                    kernel(e, &mut buf);
+                    for (&d, &v) in dofs.iter().zip(&buf) {
+                        if d != CONSTRAINED {
+                            // SAFETY: chunks of one colour share no unknown; d < n_dofs
+                            unsafe { *values.at(d as usize) += v };
+                        }
+                    }
+                }
+            });
+        }
     }
 }
 
-/// Runs the element kernels in parallel over fixed chunks of elements into `buf` (sized
-/// here), each element's block zeroed just before its kernel writes it.
-fn fill_element_buffer<F: Fn(usize, &mut [f64]) + Sync>(
-    offset: &[usize],
-    kernel: &F,
-    buf: &mut Vec<f64>,
-) {
-    let n_el = offset.len() - 1;
-    buf.resize(offset[n_el], 0.0);
-    let mut pieces: Vec<(usize, &mut [f64])> = Vec::with_capacity(n_el.div_ceil(ELEM_CHUNK));
-    let mut rest: &mut [f64] = buf;
-    let mut e0 = 0;
-    while e0 < n_el {
-        let e1 = (e0 + ELEM_CHUNK).min(n_el);
-        let (head, tail) = rest.split_at_mut(offset[e1] - offset[e0]);
-        pieces.push((e0, head));
-        rest = tail;
-        e0 = e1;
+/// Expands a packed upper triangle ([`Form::Packed`]) into a full row-major m×m matrix.
+pub fn unpack_symmetric(m: usize, packed: &[f64], full: &mut [f64]) {
+    let mut t = 0;
+    for a in 0..m {
+        for b in a..m {
+            full[a * m + b] = packed[t];
+            full[b * m + a] = packed[t];
+            t += 1;
+        }
     }
-    pieces.into_par_iter().for_each(|(e0, piece)| {
-        let e1 = (e0 + ELEM_CHUNK).min(n_el);
-        let base = offset[e0];
-        for e in e0..e1 {
-            let block = &mut piece[offset[e] - base..offset[e + 1] - base];
-            block.fill(0.0);
-            kernel(e, block);
+}
+
+const PACKED: u8 = 0;
+const SYMMETRISED: u8 = 1;
+const UNSYMMETRIC: u8 = 2;
+
+/// Hands the values of one element matrix (`buf`, in the form `FORM`) to `put` with their
+/// scatter positions, in scatter order. `m` is passed as a literal where it is known (6),
+/// so that the loops unroll.
+#[inline(always)]
+fn scatter_element<const FORM: u8, P: FnMut(u32, f64)>(
+    m: usize,
+    buf: &[f64],
+    pos: &[u32],
+    mut put: P,
+) {
+    let mut s = 0;
+    let mut t = 0;
+    for a in 0..m {
+        put(
+            pos[s],
+            if FORM == PACKED {
+                buf[t]
+            } else {
+                buf[a * m + a]
+            },
+        );
+        s += 1;
+        t += 1;
+        for b in a + 1..m {
+            let (x, y) = match FORM {
+                PACKED => (buf[t], buf[t]),
+                SYMMETRISED => {
+                    let v = 0.5 * (buf[a * m + b] + buf[b * m + a]);
+                    (v, v)
+                }
+                _ => (buf[a * m + b], buf[b * m + a]),
+            };
+            put(pos[s], x);
+            put(pos[s + 1], y);
+            s += 2;
+            t += 1;
+        }
+    }
+}
+
+/// Adds `v` into the entry at scatter position `p` (stores it, for the entry's first
+/// addition; nothing for [`SKIP`]).
+///
+/// # Safety
+/// `p & POS` is within the array `values` points to, and no other thread accesses it.
+#[inline(always)]
+unsafe fn put(values: SharedValues, p: u32, v: f64) {
+    if p != SKIP {
+        // SAFETY: as the function's contract
+        unsafe { add_into(values.at((p & POS) as usize), p & FIRST != 0, v) };
+    }
+}
+
+/// `*q = v` for an entry's first addition, else `*q += v`. A branch rather than a select:
+/// the first addition into an entry is usually the first touch of its cache line in an
+/// assembly, and a store that misses the cache does not stall the core, where the load of
+/// a select would.
+///
+/// # Safety
+/// `q` is valid for reads and writes and no other thread accesses it.
+#[inline(always)]
+unsafe fn add_into(q: *mut f64, first: bool, v: f64) {
+    // SAFETY: as the function's contract
+    unsafe {
+        if first {
+            *q = v;
+        } else {
+            *q += v;
+        }
+    }
+}
+
+/// Adds the matrix of a paired element (n nodes, `buf` in the form `FORM`) through its
+/// paired map (see [`AssemblyPlan`]'s `map`): block by block, each block's four entries
+/// with one flag. The same additions, in the same order per entry, as
+/// [`scatter_element`] on the general map. Plain loops (no closures), so that with a
+/// literal `n` everything unrolls into constant offsets.
+///
+/// # Safety
+/// The map's positions are within the array `values` points to, and no other thread
+/// accesses them.
+#[inline(always)]
+unsafe fn scatter_paired<const FORM: u8>(n: usize, buf: &[f64], map: &[u32], values: SharedValues) {
+    let (lens, blocks) = map.split_at(n);
+    let mut k = 0;
+    for i in 0..n {
+        for j in i..n {
+            // SAFETY: as the function's contract
+            unsafe {
+                add_block::<FORM>(n, buf, i, j, lens[i], blocks[k], values);
+                k += 1;
+                if j > i {
+                    add_block::<FORM>(n, buf, j, i, lens[j], blocks[k], values);
+                    k += 1;
+                }
+            }
+        }
+    }
+}
+
+/// Adds block (i, j) (slots 2i, 2i + 1 by 2j, 2j + 1) of a paired element's matrix at
+/// position `p` (row length `len`).
+///
+/// # Safety
+/// As [`scatter_paired`].
+#[inline(always)]
+unsafe fn add_block<const FORM: u8>(
+    n: usize,
+    buf: &[f64],
+    i: usize,
+    j: usize,
+    len: u32,
+    p: u32,
+    values: SharedValues,
+) {
+    let m = 2 * n;
+    let val = |a: usize, b: usize| match FORM {
+        PACKED => {
+            let (r, c) = if a <= b { (a, b) } else { (b, a) };
+            buf[r * (2 * m - r + 1) / 2 + c - r]
+        }
+        SYMMETRISED if a != b => 0.5 * (buf[a * m + b] + buf[b * m + a]),
+        _ => buf[a * m + b],
+    };
+    let first = p & FIRST != 0;
+    let r0 = (p & POS) as usize;
+    let r1 = r0 + len as usize;
+    let (a, b) = (2 * i, 2 * j);
+    // SAFETY: as the function's contract
+    unsafe {
+        add_into(values.at(r0), first, val(a, b));
+        add_into(values.at(r0 + 1), first, val(a, b + 1));
+        add_into(values.at(r1), first, val(a + 1, b));
+        add_into(values.at(r1 + 1), first, val(a + 1, b + 1));
+    }
+}
+
+/// Length of the scatter map of an element with `m` slots, paired or general.
+fn map_len(m: usize, paired: bool) -> usize {
+    if paired {
+        m / 2 + (m / 2).pow(2)
+    } else {
+        m * m
+    }
+}
+
+/// Index of slot pair (a, b) in the order of [`for_pairs`] over m slots.
+fn general_index(m: usize, a: usize, b: usize) -> usize {
+    let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+    // pairs before row lo's diagonal: Σ_{k<lo} (2(m − k) − 1) = lo (2m − lo)
+    let start = lo * (2 * m - lo);
+    match hi - lo {
+        0 => start,
+        d if a < b => start + 2 * d - 1,
+        d => start + 2 * d,
+    }
+}
+
+/// Whether an element's map can be paired (see [`AssemblyPlan`]'s `map`); `general` is its
+/// general map with the flags.
+fn is_paired(pattern: &CsrPattern, dofs: &[u32], general: &[u32]) -> bool {
+    let m = dofs.len();
+    if m == 0 || !m.is_multiple_of(2) {
+        return false;
+    }
+    let n = m / 2;
+    let node_ok = |i: usize| {
+        let d = dofs[2 * i];
+        d != CONSTRAINED
+            && dofs[2 * i + 1] == d + 1
+            && !(0..i).any(|k| dofs[2 * k] == d)
+            && pattern.row_cols(d as usize) == pattern.row_cols(d as usize + 1)
+    };
+    if !(0..n).all(node_ok) {
+        return false;
+    }
+    // the four entries of a block share the first-addition flag
+    let flag = |a: usize, b: usize| general[general_index(m, a, b)] & FIRST;
+    let mut same = true;
+    for_pairs(n, |_, i, j| {
+        let f = flag(2 * i, 2 * j);
+        same &= flag(2 * i, 2 * j + 1) == f
+            && flag(2 * i + 1, 2 * j) == f
+            && flag(2 * i + 1, 2 * j + 1) == f;
+    });
+    same
+}
+
+/// Calls `f(c, piece)` in parallel for the pieces `data[offsets[c]..offsets[c + 1]]`.
+fn for_chunk_pieces<T: Send>(
+    data: &mut [T],
+    offsets: &[usize],
+    f: impl Fn(usize, &mut [T]) + Sync,
+) {
+    let mut pieces: Vec<(usize, &mut [T])> = Vec::with_capacity(offsets.len() - 1);
+    let mut rest = data;
+    for c in 0..offsets.len() - 1 {
+        let (head, tail) = rest.split_at_mut(offsets[c + 1] - offsets[c]);
+        pieces.push((c, head));
+        rest = tail;
+    }
+    pieces.into_par_iter().for_each(|(c, piece)| f(c, piece));
+}
+
+/// Zeroes the entries `list` (scatter positions without flags), in parallel.
+///
+/// # Safety
+/// The positions are distinct and within the array `values` points to.
+unsafe fn zero_entries(values: SharedValues, list: &[u32]) {
+    list.par_chunks(ROW_CHUNK * 8).for_each(|ks| {
+        for &k in ks {
+            // SAFETY: as the function's contract
+            unsafe { *values.at(k as usize) = 0.0 };
         }
     });
 }
 
-/// `out[k] = sum of buf[pos[ptr[k]..ptr[k + 1]]]`, summed in the stored order.
-fn gather(ptr: &[usize], pos: &[usize], buf: &[f64], out: &mut [f64]) {
-    out.par_chunks_mut(ROW_CHUNK)
-        .enumerate()
-        .for_each(|(c, chunk)| {
-            let k0 = c * ROW_CHUNK;
-            for (j, o) in chunk.iter_mut().enumerate() {
-                let k = k0 + j;
-                let mut s = 0.0;
-                for &p in &pos[ptr[k]..ptr[k + 1]] {
-                    s += buf[p];
-                }
-                *o = s;
+/// The full symmetric pattern of a connectivity, with every diagonal entry (parallel over
+/// fixed chunks of rows).
+fn build_pattern(n_dofs: usize, conn: &Connectivity) -> CsrPattern {
+    let n_el = conn.len();
+    // dof -> elements (ascending, without repeats)
+    let mut count = vec![0usize; n_dofs + 1];
+    for e in 0..n_el {
+        for (a, &d) in conn.dofs(e).iter().enumerate() {
+            if d == CONSTRAINED {
+                continue;
             }
-        });
+            assert!(
+                (d as usize) < n_dofs,
+                "element {e} slot {a}: dof {d} >= n_dofs = {n_dofs}"
+            );
+            if !conn.dofs(e)[..a].contains(&d) {
+                count[d as usize + 1] += 1;
+            }
+        }
+    }
+    for i in 0..n_dofs {
+        count[i + 1] += count[i];
+    }
+    let de_ptr = count;
+    let mut fill = de_ptr.clone();
+    let mut de = vec![0u32; de_ptr[n_dofs]];
+    for e in 0..n_el {
+        let dofs = conn.dofs(e);
+        for (a, &d) in dofs.iter().enumerate() {
+            if d != CONSTRAINED && !dofs[..a].contains(&d) {
+                de[fill[d as usize]] = e as u32;
+                fill[d as usize] += 1;
+            }
+        }
+    }
+    let chunks: Vec<(Vec<usize>, Vec<u32>)> = (0..n_dofs.div_ceil(ROW_CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let (mut lens, mut cols) = (Vec::new(), Vec::new());
+            for i in c * ROW_CHUNK..((c + 1) * ROW_CHUNK).min(n_dofs) {
+                let start = cols.len();
+                cols.push(i as u32);
+                for &e in &de[de_ptr[i]..de_ptr[i + 1]] {
+                    cols.extend(
+                        conn.dofs(e as usize)
+                            .iter()
+                            .copied()
+                            .filter(|&d| d != CONSTRAINED),
+                    );
+                }
+                let row = &mut cols[start..];
+                row.sort_unstable();
+                let mut len = 0;
+                for k in 0..row.len() {
+                    if k == 0 || row[k] != row[len - 1] {
+                        row[len] = row[k];
+                        len += 1;
+                    }
+                }
+                cols.truncate(start + len);
+                lens.push(len);
+            }
+            (lens, cols)
+        })
+        .collect();
+    let row_ptr = prefix_sum(chunks.iter().flat_map(|c| c.0.iter().copied()));
+    let mut col_idx = Vec::with_capacity(row_ptr[n_dofs]);
+    for c in &chunks {
+        col_idx.extend_from_slice(&c.1);
+    }
+    CsrPattern::from_parts_unchecked(n_dofs, row_ptr, col_idx)
+}
+
+/// Greedy colouring of the chunks, group by group, in chunk order: a chunk takes the
+/// smallest colour that no earlier chunk of its group sharing one of its unknowns has.
+/// Colours are kept as bit masks per unknown, 64 to a palette. Returns each chunk's colour
+/// (numbered consecutively across groups) and where each group's colours start.
+fn colour_chunks(
+    n_dofs: usize,
+    conn: &Connectivity,
+    group_start: &[usize],
+    chunk_start: &[usize],
+) -> (Vec<u32>, Vec<usize>) {
+    let n_chunks = chunk_start.len() - 1;
+    let mut colour = vec![0u32; n_chunks];
+    let mut group_colour = vec![0];
+    let mut palettes: Vec<Vec<u64>> = Vec::new();
+    let mut c = 0;
+    for g in 0..group_start.len() - 1 {
+        for p in &mut palettes {
+            p.fill(0);
+        }
+        let mut used = 0;
+        while c < n_chunks && chunk_start[c] < group_start[g + 1] {
+            let dofs = || {
+                (chunk_start[c]..chunk_start[c + 1])
+                    .flat_map(|e| conn.dofs(e))
+                    .filter(|&&d| d != CONSTRAINED)
+                    .map(|&d| d as usize)
+            };
+            let mut p = 0;
+            let bit = loop {
+                if p == palettes.len() {
+                    palettes.push(vec![0; n_dofs]);
+                }
+                let taken = dofs().fold(0u64, |t, d| t | palettes[p][d]);
+                if taken != u64::MAX {
+                    break (!taken).trailing_zeros();
+                }
+                p += 1;
+            };
+            for d in dofs() {
+                palettes[p][d] |= 1 << bit;
+            }
+            let k = 64 * p + bit as usize;
+            used = used.max(k + 1);
+            colour[c] = (group_colour[g] + k) as u32;
+            c += 1;
+        }
+        group_colour.push(group_colour[g] + used);
+    }
+    (colour, group_colour)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A band of 4-slot elements (two consecutive pairs of unknowns each), long enough for
+    /// several chunks per group.
+    fn band(n_el: usize) -> (Connectivity, usize) {
+        let mut conn = Connectivity::new();
+        for e in 0..n_el {
+            let d = 2 * e as u32;
+            conn.push(&[d, d + 1, d + 2, d + 3]);
+        }
+        (conn, 2 * n_el + 2)
+    }
+
+    #[test]
+    fn chunks_of_one_colour_share_no_unknown() {
+        let (conn, n) = band(5 * ELEM_CHUNK + 17);
+        let plan = AssemblyPlan::with_groups(n, &conn, &[3 * ELEM_CHUNK, conn.len()]);
+        assert_eq!(plan.n_groups(), 2);
+        for g in 0..2 {
+            assert!(
+                plan.n_colours(g) >= 2,
+                "consecutive chunks share an unknown"
+            );
+        }
+        for k in 0..plan.group_colour[2] {
+            let mut owner = vec![u32::MAX; n];
+            for &c in &plan.colour_chunks[plan.colour_ptr[k]..plan.colour_ptr[k + 1]] {
+                for e in plan.chunk_start[c as usize]..plan.chunk_start[c as usize + 1] {
+                    for &d in conn.dofs(e) {
+                        let o = &mut owner[d as usize];
+                        assert!(*o == u32::MAX || *o == c, "colour {k}: chunks {o} and {c}");
+                        *o = c;
+                    }
+                }
+            }
+        }
+        // colours run group by group, and every chunk has one
+        for (c, &k) in plan.chunk_colour.iter().enumerate() {
+            let g = plan
+                .group_start
+                .partition_point(|&s| s <= plan.chunk_start[c])
+                - 1;
+            assert!((plan.group_colour[g]..plan.group_colour[g + 1]).contains(&(k as usize)));
+        }
+        // every element of this band is paired: 2 row lengths and 4 blocks
+        assert_eq!(plan.n_paired(0) + plan.n_paired(1), conn.len());
+        assert_eq!(plan.map_len(0), 3 * ELEM_CHUNK * 6);
+    }
+
+    #[test]
+    fn general_index_follows_the_pair_order() {
+        for m in 1..8 {
+            for_pairs(m, |k, a, b| {
+                assert_eq!(general_index(m, a, b), k, "m {m} ({a}, {b})")
+            });
+        }
+    }
 }

@@ -27,7 +27,7 @@ pub mod pcg;
 pub mod split;
 pub mod substructure;
 
-pub use assembly::{AssemblyPlan, Connectivity, CONSTRAINED};
+pub use assembly::{unpack_symmetric, AssemblyPlan, Connectivity, Form, CONSTRAINED};
 pub use backend::{
     backend_from_name, max_relative_difference, same_bits, LinearBackend, SolveError, SolverStats,
     BACKENDS,

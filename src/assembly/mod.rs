@@ -1,8 +1,15 @@
 //! Assembly: maps the mesh and the materials onto `dfem_kernels::assembly`.
 //!
-//! Element order is fixed (all triangles, then all contacts), so the pattern and the
-//! gather map are built once per contact topology and every assembly sums in the same
+//! Element order is fixed (the triangles, group 0; the contacts, group 1; for dynamics the
+//! rigid blocks' diagonal elements, group 2), so the pattern, the scatter map and the
+//! colour order are built once per contact topology and every assembly sums in the same
 //! order whatever the number of threads.
+//!
+//! The triangles' part of the stiffness depends only on the geometry: when a geometry
+//! comes back (the static driver assembles every iteration matrix of an increment on the
+//! last converged geometry), it is kept, and the next assemblies on that geometry add only
+//! the contacts onto it (bit-identical to a whole assembly: the plan's groups), or
+//! ([`System::stiffness_update`]) only the contacts whose local stiffness changed.
 
 pub mod loads;
 pub mod mass;
@@ -12,7 +19,12 @@ use crate::mesh::{Contact, Mesh, PointMap};
 
 use crate::geometry::polygon::Point;
 use crate::scene::Scene;
-use dfem_kernels::{AssemblyPlan, Connectivity, CsrMatrix, CONSTRAINED};
+use dfem_kernels::{unpack_symmetric, AssemblyPlan, Connectivity, CsrMatrix, Form, CONSTRAINED};
+use std::sync::Mutex;
+
+/// Element groups of a [`System`]'s plan.
+const TRIANGLES: usize = 0;
+const CONTACTS: usize = 1;
 
 /// The assembly plan of a mesh: triangles (6 slots each) then contacts (6 slots each:
 /// the 3 unknowns node l depends on, then node m's).
@@ -20,11 +32,24 @@ pub struct System {
     pub plan: AssemblyPlan,
     pub n_triangles: usize,
     pub n_contacts: usize,
-    /// Per triangle: Dₑ (Pa) of its block material, times the thickness (m).
-    tri_dt: Vec<[[f64; 3]; 3]>,
-    /// Per triangle: D_v (Pa·s) of its block material (viscous Lamé constants), times
-    /// the thickness (m).
-    tri_dv: Vec<[[f64; 3]; 3]>,
+    /// Material of each triangle, an index into `dt` and `dv`.
+    tri_material: Vec<u32>,
+    /// Per material: Dₑ (Pa) times the thickness (m).
+    dt: Vec<[[f64; 3]; 3]>,
+    /// Per material: D_v (Pa·s, the viscous Lamé constants) times the thickness (m);
+    /// empty unless the system is built for dynamics.
+    dv: Vec<[[f64; 3]; 3]>,
+    /// The triangles' part of K on the last geometry seen twice.
+    blocks: Mutex<BlockCache>,
+}
+
+/// See [`System`]'s `blocks`.
+#[derive(Default)]
+struct BlockCache {
+    /// Node positions (m) of the last geometry assembled on.
+    nodes: Vec<Point>,
+    /// The triangles' part of K (N/m) on that geometry, once it has been seen twice.
+    values: Option<CsrMatrix>,
 }
 
 /// Local stiffness of a contact in its (n, s) frame (N/m): row = force component,
@@ -35,6 +60,18 @@ pub type LocalStiffness = [[f64; 2]; 2];
 /// The local stiffness of elastic springs.
 pub fn diagonal(k: ContactSprings) -> LocalStiffness {
     [[k.kn, 0.0], [0.0, k.ks]]
+}
+
+fn symmetric(k: &LocalStiffness) -> bool {
+    k[0][1] == k[1][0]
+}
+
+/// The same positions to the bit (a cached triangles' part is valid only for them).
+fn same_nodes(a: &[Point], b: &[Point]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(p, q)| p[0].to_bits() == q[0].to_bits() && p[1].to_bits() == q[1].to_bits())
 }
 
 impl System {
@@ -69,40 +106,43 @@ impl System {
             dofs[ml.len..ml.len + mm.len].copy_from_slice(&mm.dofs[..mm.len]);
             conn.push(&dofs[..ml.len + mm.len]);
         }
+        let mut group_ends = vec![conn.len(); 2];
+        group_ends[TRIANGLES] = mesh.triangles.len();
         if rigid_diagonal {
             for b in &mesh.blocks {
                 if let crate::mesh::BlockDofs::Rigid { first, .. } = b.dofs {
                     conn.push(&[first, first + 1, first + 2]);
                 }
             }
+            group_ends.push(conn.len());
         }
         let t = scene.model.thickness;
-        let tri_dt = mesh
-            .tri_block
+        let scaled = |d: [[f64; 3]; 3]| d.map(|r| r.map(|x| x * t));
+        let dt = scene
+            .materials
             .iter()
-            .map(|&b| {
-                let m = &scene.materials[scene.blocks[b as usize].material];
-                let d = block_elastic(m, scene.model.plane);
-                d.map(|r| r.map(|x| x * t))
-            })
+            .map(|m| scaled(block_elastic(m, scene.model.plane)))
             .collect();
         // viscous matrices only for a dynamic analysis (a static run does no damping work)
-        let tri_dv = mesh
-            .tri_block
+        let dv = scene
+            .materials
             .iter()
             .filter(|_| rigid_diagonal)
-            .map(|&b| {
-                let m = &scene.materials[scene.blocks[b as usize].material];
-                let d = crate::material::block_viscous(m, scene.model.plane);
-                d.map(|r| r.map(|x| x * t))
-            })
+            .map(|m| scaled(crate::material::block_viscous(m, scene.model.plane)))
+            .collect();
+        let tri_material = mesh
+            .tri_block
+            .iter()
+            .map(|&b| scene.blocks[b as usize].material as u32)
             .collect();
         System {
-            plan: AssemblyPlan::new(mesh.n_dofs, &conn),
+            plan: AssemblyPlan::with_groups(mesh.n_dofs, &conn, &group_ends),
             n_triangles: mesh.triangles.len(),
             n_contacts: mesh.contacts.len(),
-            tri_dt,
-            tri_dv,
+            tri_material,
+            dt,
+            dv,
+            blocks: Mutex::new(BlockCache::default()),
         }
     }
 
@@ -120,8 +160,84 @@ impl System {
     /// stiffness per contact.
     /// When a local stiffness is unsymmetric (Newton's tangent of a slipping contact), so
     /// is the result (for an LU backend); otherwise it is symmetric to the bit.
+    ///
+    /// The second time in a row that the node positions are the same (to the bit), the
+    /// triangles' part is kept, and from then on, while they stay the same, only the
+    /// contacts are assembled, onto a copy of it. The result is bit-identical either way.
     pub fn stiffness_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
-        self.assemble_with(mesh, &self.tri_dt, local, out);
+        let mut cache = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
+        let form = self.form(local);
+        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, &self.dt, local, form, e, ke);
+        let groups = 0..self.plan.n_groups();
+        if same_nodes(&cache.nodes, &mesh.nodes) {
+            if cache.values.is_none() {
+                let mut b = CsrMatrix::zeros(self.plan.pattern().clone());
+                let packed = |e: usize, ke: &mut [f64]| {
+                    self.element(mesh, &self.dt, local, Form::Packed, e, ke)
+                };
+                self.plan
+                    .assemble_groups(Form::Packed, 0..CONTACTS, None, packed, &mut b);
+                cache.values = Some(b);
+            }
+            let base = cache.values.as_ref();
+            self.plan
+                .assemble_groups(form, CONTACTS..groups.end, base, kernel, out);
+        } else {
+            cache.nodes.clear();
+            cache.nodes.extend_from_slice(&mesh.nodes);
+            cache.values = None;
+            self.plan.assemble_groups(form, groups, None, kernel, out);
+        }
+    }
+
+    /// Stiffness (N/m) like [`Self::stiffness_into`], every element assembled (no kept
+    /// triangles' part, which it neither uses nor changes).
+    pub fn stiffness_full_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
+        let form = self.form(local);
+        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, &self.dt, local, form, e, ke);
+        self.plan
+            .assemble_groups(form, 0..self.plan.n_groups(), None, kernel, out);
+    }
+
+    /// The update path: `out` holds [`Self::stiffness_into`]`(mesh, prev, out)` (and has
+    /// not been changed since); this makes it `stiffness_into(mesh, local, out)`, bit for
+    /// bit, re-assembling only the entries of the contacts whose local stiffness differs
+    /// from `prev` (with the kept triangles' part). When the node positions are not those
+    /// of the kept triangles' part, or more than 1/8 of the contacts changed, it assembles
+    /// all the contacts (or everything) instead; with none changed, it does nothing.
+    pub fn stiffness_update(
+        &self,
+        mesh: &Mesh,
+        prev: &[LocalStiffness],
+        local: &[LocalStiffness],
+        out: &mut CsrMatrix,
+    ) {
+        let changed: Vec<usize> = (0..self.n_contacts)
+            .filter(|&c| {
+                let (a, b) = (prev[c].as_flattened(), local[c].as_flattened());
+                a.iter().zip(b).any(|(x, y)| x.to_bits() != y.to_bits())
+            })
+            .map(|c| self.n_triangles + c)
+            .collect();
+        if changed.is_empty() {
+            return;
+        }
+        let cache = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
+        let kept = same_nodes(&cache.nodes, &mesh.nodes) && cache.values.is_some();
+        if !kept || 8 * changed.len() > self.n_contacts {
+            drop(cache);
+            return self.stiffness_into(mesh, local, out);
+        }
+        // an unsymmetric element adds the same values in either form, so the entries left
+        // as they are stay those of the new form
+        let form = if self.form(prev) == Form::Packed {
+            self.form(local)
+        } else {
+            Form::Unsymmetric
+        };
+        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, &self.dt, local, form, e, ke);
+        self.plan
+            .reassemble(form, &changed, cache.values.as_ref(), kernel, out);
     }
 
     /// Damping matrix C (N·s/m) of the Kelvin–Voigt viscosities (METHOD.md §2, §6), for a
@@ -129,43 +245,66 @@ impl System {
     /// Cₑ = t A Bᵀ D_v B for the triangles and Tᵀ C′ T for the contacts, with a local
     /// viscosity per contact (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h where they act).
     pub fn damping_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
-        self.assemble_with(mesh, &self.tri_dv, local, out);
+        let form = self.form(local);
+        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, &self.dv, local, form, e, ke);
+        self.plan
+            .assemble_groups(form, 0..self.plan.n_groups(), None, kernel, out);
     }
 
-    fn assemble_with(
+    /// Packed when every contact's local matrix is symmetric, else unsymmetric.
+    fn form(&self, local: &[LocalStiffness]) -> Form {
+        if local.iter().all(symmetric) {
+            Form::Packed
+        } else {
+            Form::Unsymmetric
+        }
+    }
+
+    /// Element `e`'s matrix in `form` ([`Form::Packed`] or [`Form::Unsymmetric`]): a
+    /// triangle with the material matrices `d` (per material), a contact with its local
+    /// matrix. A symmetric element matrix is computed packed in either form, so that an
+    /// element adds the same values whatever the form.
+    fn element(
         &self,
         mesh: &Mesh,
-        tri: &[[[f64; 3]; 3]],
+        d: &[[[f64; 3]; 3]],
         local: &[LocalStiffness],
-        out: &mut CsrMatrix,
+        form: Form,
+        e: usize,
+        ke: &mut [f64],
     ) {
-        let nt = self.n_triangles;
-        let nc = self.n_contacts;
-        let kernel = |e: usize, ke: &mut [f64]| {
-            if e < nt {
-                let t = mesh.triangles[e];
-                let p = t.map(|n| mesh.nodes[n as usize]);
-                cst_stiffness(p, &tri[e], ke);
-            } else if e < nt + nc {
-                let c = e - nt;
-                let con = &mesh.contacts[c];
-                let (ml, mm) = mesh.contact_maps(con);
-                contact_stiffness(&ml, &mm, con.normal, &local[c], ke);
+        let (nt, nc) = (self.n_triangles, self.n_contacts);
+        if e < nt {
+            let t = mesh.triangles[e];
+            let p = t.map(|n| mesh.nodes[n as usize]);
+            let d = &d[self.tri_material[e] as usize];
+            if form == Form::Packed {
+                cst_stiffness_packed(p, d, ke);
             } else {
-                // the rigid blocks' diagonal elements (dynamics) carry no stiffness
-                ke.fill(0.0);
+                cst_stiffness(p, d, ke);
             }
-        };
-        if local.iter().all(|k| k[0][1] == k[1][0]) {
-            self.plan.assemble(kernel, out);
-        } else {
-            self.plan.assemble_unsymmetric(kernel, out);
+        } else if e < nt + nc {
+            let c = e - nt;
+            let con = &mesh.contacts[c];
+            let (ml, mm) = mesh.contact_maps(con);
+            let k = &local[c];
+            match (form, symmetric(k)) {
+                (Form::Packed, _) => contact_stiffness_packed(&ml, &mm, con.normal, k, ke),
+                (_, true) => {
+                    let mut packed = [0.0; 78];
+                    contact_stiffness_packed(&ml, &mm, con.normal, k, &mut packed);
+                    unpack_symmetric(ml.len + mm.len, &packed, ke);
+                }
+                _ => contact_stiffness(&ml, &mm, con.normal, k, ke),
+            }
         }
+        // else: the rigid blocks' diagonal elements (dynamics) carry no stiffness (`ke`
+        // is zeroed by the plan)
     }
 
     /// tDₑ (Pa·m) of triangle `t`.
     pub fn tri_dt(&self, t: usize) -> &[[f64; 3]; 3] {
-        &self.tri_dt[t]
+        &self.dt[self.tri_material[t] as usize]
     }
 }
 
@@ -187,19 +326,51 @@ pub fn cst_b(p: [Point; 3]) -> ([[f64; 6]; 3], f64) {
     (m, 0.5 * two_a)
 }
 
-/// CST stiffness Kₑ = A Bᵀ (t Dₑ) B into `ke` (row-major 6×6, N/m).
+/// CST stiffness Kₑ = A Bᵀ (t Dₑ) B into `ke` (row-major 6×6, N/m): the packed upper
+/// triangle of [`cst_stiffness_packed`], mirrored.
 pub fn cst_stiffness(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
-    let (b, area) = cst_b(p);
-    // DB = (tD) B, 3×6
-    let mut db = [[0.0; 6]; 3];
+    let mut packed = [0.0; 21];
+    cst_stiffness_packed(p, dt, &mut packed);
+    unpack_symmetric(6, &packed, ke);
+}
+
+/// CST stiffness Kₑ = A Bᵀ (t Dₑ) B (N/m, METHOD.md §2), its upper triangle packed by rows
+/// into `ke` (21 values (0,0), (0,1), …, (0,5), (1,1), …, (5,5); slots 2i and 2i + 1 are
+/// node i's x and y). B is sparse: node j's block of B is 1/(2A) [[bⱼ,0],[0,cⱼ],[cⱼ,bⱼ]]
+/// ([`cst_b`]), so K_ij = 1/(4A) [[bᵢ,0,cᵢ],[0,cᵢ,bᵢ]] (tDₑ) [[bⱼ,0],[0,cⱼ],[cⱼ,bⱼ]]: 14
+/// products per node for (tDₑ)Bⱼ/(4A), then 2 per entry, 84 in all (the dense triple
+/// product of [`cst_b`]'s matrices takes 324), and the lower triangle is not computed.
+pub fn cst_stiffness_packed(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
+    let ke: &mut [f64; 21] = (&mut ke[..21]).try_into().expect("21 values");
+    let b = [p[1][1] - p[2][1], p[2][1] - p[0][1], p[0][1] - p[1][1]];
+    let c = [p[2][0] - p[1][0], p[0][0] - p[2][0], p[1][0] - p[0][0]];
+    // 1/(4A), A the signed area
+    let f = 0.5 / (b[0] * c[1] - b[1] * c[0]);
+    // (tDₑ) Bⱼ / (4A): its x column and its y column, per node j
+    let db: [[[f64; 3]; 2]; 3] = std::array::from_fn(|j| {
+        let (bj, cj) = (f * b[j], f * c[j]);
+        [
+            std::array::from_fn(|r| dt[r][0] * bj + dt[r][2] * cj),
+            std::array::from_fn(|r| dt[r][1] * cj + dt[r][2] * bj),
+        ]
+    });
+    let mut t = 0;
     for i in 0..3 {
-        for j in 0..6 {
-            db[i][j] = dt[i][0] * b[0][j] + dt[i][1] * b[1][j] + dt[i][2] * b[2][j];
+        let (bi, ci) = (b[i], c[i]);
+        // row x of node i: [bᵢ, 0, cᵢ] · column; row y: [0, cᵢ, bᵢ] · column
+        let rx = |d: &[f64; 3]| bi * d[0] + ci * d[2];
+        let ry = |d: &[f64; 3]| ci * d[1] + bi * d[2];
+        for d in &db[i..] {
+            ke[t] = rx(&d[0]);
+            ke[t + 1] = rx(&d[1]);
+            t += 2;
         }
-    }
-    for i in 0..6 {
-        for j in 0..6 {
-            ke[6 * i + j] = area * (b[0][i] * db[0][j] + b[1][i] * db[1][j] + b[2][i] * db[2][j]);
+        ke[t] = ry(&db[i][1]);
+        t += 1;
+        for d in &db[i + 1..] {
+            ke[t] = ry(&d[0]);
+            ke[t + 1] = ry(&d[1]);
+            t += 2;
         }
     }
 }
@@ -254,22 +425,51 @@ pub fn contact_stiffness(
     k: &LocalStiffness,
     ke: &mut [f64],
 ) {
+    let (g, len) = contact_gradients(ml, mm, n);
+    for i in 0..len {
+        for j in 0..len {
+            ke[len * i + j] = contact_entry(&g, k, i, j);
+        }
+    }
+}
+
+/// [`contact_stiffness`] for a symmetric `k`: the upper triangle packed by rows
+/// (len (len + 1)/2 values), half the work and symmetric by construction.
+pub fn contact_stiffness_packed(
+    ml: &PointMap,
+    mm: &PointMap,
+    n: Point,
+    k: &LocalStiffness,
+    ke: &mut [f64],
+) {
+    let (g, len) = contact_gradients(ml, mm, n);
+    let mut t = 0;
+    for i in 0..len {
+        for j in i..len {
+            ke[t] = contact_entry(&g, k, i, j);
+            t += 1;
+        }
+    }
+}
+
+/// gₙ and gₛ ([`contact_gradient`]) and the number of slots.
+fn contact_gradients(ml: &PointMap, mm: &PointMap, n: Point) -> ([[f64; 12]; 2], usize) {
     let g = [
         contact_gradient(ml, mm, n),
         contact_gradient(ml, mm, [-n[1], n[0]]),
     ];
-    let len = ml.len + mm.len;
-    for i in 0..len {
-        for j in 0..len {
-            let mut v = 0.0;
-            for a in 0..2 {
-                for b in 0..2 {
-                    v += g[a][i] * k[a][b] * g[b][j];
-                }
-            }
-            ke[len * i + j] = v;
+    (g, ml.len + mm.len)
+}
+
+/// Entry (i, j) of Σ_ab g_a k_ab g_bᵀ.
+fn contact_entry(g: &[[f64; 12]; 2], k: &LocalStiffness, i: usize, j: usize) -> f64 {
+    let mut v = 0.0;
+    for a in 0..2 {
+        for b in 0..2 {
+            v += g[a][i] * k[a][b] * g[b][j];
         }
     }
+    v
 }
 
 #[cfg(test)]

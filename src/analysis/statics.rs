@@ -20,7 +20,6 @@ use crate::{Error, Result};
 use dfem_kernels::CsrMatrix;
 use std::time::Instant;
 
-#[path = "arc_length.rs"]
 pub mod arc_length;
 
 /// The iteration strategy (`[analysis] strategy`).

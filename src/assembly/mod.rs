@@ -166,10 +166,10 @@ impl System {
     /// contacts are assembled, onto a copy of it. The result is bit-identical either way.
     pub fn stiffness_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
         let mut cache = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
-        let form = self.form(local);
-        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, &self.dt, local, form, e, ke);
-        let groups = 0..self.plan.n_groups();
         if same_nodes(&cache.nodes, &mesh.nodes) {
+            let form = self.form(local);
+            let kernel =
+                |e: usize, ke: &mut [f64]| self.element(mesh, &self.dt, local, form, e, ke);
             if cache.values.is_none() {
                 let mut b = CsrMatrix::zeros(self.plan.pattern().clone());
                 let packed = |e: usize, ke: &mut [f64]| {
@@ -181,20 +181,32 @@ impl System {
             }
             let base = cache.values.as_ref();
             self.plan
-                .assemble_groups(form, CONTACTS..groups.end, base, kernel, out);
+                .assemble_groups(form, CONTACTS..self.plan.n_groups(), base, kernel, out);
         } else {
             cache.nodes.clear();
             cache.nodes.extend_from_slice(&mesh.nodes);
             cache.values = None;
-            self.plan.assemble_groups(form, groups, None, kernel, out);
+            self.assemble_all(mesh, &self.dt, local, out);
         }
     }
 
     /// Stiffness (N/m) like [`Self::stiffness_into`], every element assembled (no kept
     /// triangles' part, which it neither uses nor changes).
     pub fn stiffness_full_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
+        self.assemble_all(mesh, &self.dt, local, out);
+    }
+
+    /// Every element assembled, the triangles with the material matrices `d` (`dt` for
+    /// stiffness, `dv` for damping).
+    fn assemble_all(
+        &self,
+        mesh: &Mesh,
+        d: &[[[f64; 3]; 3]],
+        local: &[LocalStiffness],
+        out: &mut CsrMatrix,
+    ) {
         let form = self.form(local);
-        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, &self.dt, local, form, e, ke);
+        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, d, local, form, e, ke);
         self.plan
             .assemble_groups(form, 0..self.plan.n_groups(), None, kernel, out);
     }
@@ -245,10 +257,7 @@ impl System {
     /// Cₑ = t A Bᵀ D_v B for the triangles and Tᵀ C′ T for the contacts, with a local
     /// viscosity per contact (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h where they act).
     pub fn damping_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
-        let form = self.form(local);
-        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, &self.dv, local, form, e, ke);
-        self.plan
-            .assemble_groups(form, 0..self.plan.n_groups(), None, kernel, out);
+        self.assemble_all(mesh, &self.dv, local, out);
     }
 
     /// Packed when every contact's local matrix is symmetric, else unsymmetric.

@@ -343,16 +343,19 @@ fn substructured_is_bit_identical_for_1_and_2_threads() {
     }
 }
 
-/// `dfem run --example wall` (static, gravity) with `--solver faer-substructured`: the
+/// `dfem run --example wall` (static, gravity) with `--solver faer-substructured`, by
+/// default (2 subdomains) and with `--subdomains 1, 2, 4` (the entry point users use): the
 /// same status and iterations as the default backend and the block displacements of
 /// summary.json to 1e-8 relative (each solve agrees to ~1e-12; the secant iterations'
-/// out-of-balance tolerance bounds what can differ after them).
+/// out-of-balance tolerance bounds what can differ after them). The factor's stored
+/// entries (summary.json) differ between 1, 2 and 4 subdomains — the interface fronts are
+/// dense — which shows that the option reached the backend.
 #[test]
 fn static_wall_example_end_to_end_matches_the_default_backend() {
     let dir = common::tmp_dir("substructured_wall");
-    let run = |solver: &str| {
-        let out = dir.join(solver);
-        common::dfem_ok(&[
+    let run = |solver: &str, k: Option<&str>| {
+        let out = dir.join(format!("{solver}_{}", k.unwrap_or("default")));
+        let mut args = vec![
             "run",
             "--example",
             "wall",
@@ -362,16 +365,16 @@ fn static_wall_example_end_to_end_matches_the_default_backend() {
             out.to_str().unwrap(),
             "--quiet",
             "--no-plots",
-        ]);
+        ];
+        if let Some(k) = k {
+            args.extend(["--subdomains", k]);
+        }
+        common::dfem_ok(&args);
         let s: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
                 .unwrap();
         s
     };
-    let a = run("faer-cholesky");
-    let b = run("faer-substructured");
-    assert_eq!(a["status"], b["status"]);
-    assert_eq!(a["stats"]["iterations"], b["stats"]["iterations"]);
     let motions = |s: &serde_json::Value| -> Vec<f64> {
         s["blocks"]
             .as_array()
@@ -383,8 +386,72 @@ fn static_wall_example_end_to_end_matches_the_default_backend() {
             })
             .collect()
     };
-    let (ma, mb) = (motions(&a), motions(&b));
-    assert!(ma.len() >= 2 * 50 && ma.len() == mb.len());
-    let err = max_relative_difference(&mb, &ma);
-    assert!(err < 1e-8, "block displacements differ by {err:e}");
+    let a = run("faer-cholesky", None);
+    let ma = motions(&a);
+    assert!(ma.len() >= 2 * 50);
+    let mut nnz = Vec::new();
+    for k in [None, Some("1"), Some("2"), Some("4")] {
+        let b = run("faer-substructured", k);
+        assert_eq!(a["status"], b["status"], "{k:?}");
+        assert_eq!(a["stats"]["iterations"], b["stats"]["iterations"], "{k:?}");
+        let mb = motions(&b);
+        assert_eq!(ma.len(), mb.len());
+        let err = max_relative_difference(&mb, &ma);
+        assert!(
+            err < 1e-8,
+            "{k:?} subdomains: block displacements differ by {err:e}"
+        );
+        nnz.push(b["stats"]["factor_nnz"].as_u64().unwrap());
+    }
+    // the default is 2 subdomains; 1, 2 and 4 give different factors
+    assert_eq!(nnz[0], nnz[2]);
+    assert!(
+        nnz[1] != nnz[2] && nnz[2] != nnz[3] && nnz[1] != nnz[3],
+        "{nnz:?}"
+    );
+}
+
+/// `--subdomains` below 1, or with another backend than faer-substructured, is refused
+/// with a message that names the option and the fix (exit status 2, no panic).
+#[test]
+fn bad_subdomains_option_is_a_clear_error() {
+    let dir = common::tmp_dir("substructured_bad_option");
+    let out = dir.join("out");
+    for (args, says) in [
+        (
+            &["--solver", "faer-substructured", "--subdomains", "0"][..],
+            "at least 1",
+        ),
+        (
+            &["--subdomains", "2"][..],
+            "applies to --solver faer-substructured only",
+        ),
+        (
+            &["--solver", "pcg", "--subdomains", "4"][..],
+            "not to 'pcg'",
+        ),
+    ] {
+        let o = std::process::Command::new(common::dfem_bin())
+            .args(["run", "--example", "wall", "--quiet", "--out"])
+            .arg(&out)
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("option --subdomains") && err.contains(says) && err.contains("fix:"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    // the library entry point: the backend asks for the partition it was given
+    for k in [1, 3, 4] {
+        let opts = dfem::solve::BackendOptions {
+            subdomains: Some(k),
+            ..Default::default()
+        };
+        let be = dfem::solve::backend_with("faer-substructured", &opts).unwrap();
+        assert_eq!(be.partition_parts(), Some(k));
+    }
 }

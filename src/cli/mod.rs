@@ -46,6 +46,11 @@ enum Command {
         /// the cargo features of the same name mumps, mumps-spd, mumps-lu, petsc.
         #[arg(long, default_value = solve::DEFAULT)]
         solver: String,
+        /// Number of subdomains of --solver faer-substructured (default 2, one per core on
+        /// a two-core machine): the movable blocks split by METIS into K parts, each
+        /// factorized on its own task.
+        #[arg(long, value_name = "K")]
+        subdomains: Option<usize>,
         /// Options for PETSc's database when --solver petsc, as on PETSc's command line
         /// (default: -ksp_type cg -pc_type gamg, rtol 1e-12).
         #[arg(long, value_name = "OPTIONS", allow_hyphen_values = true)]
@@ -110,6 +115,9 @@ enum Command {
         /// Options for PETSc's database (as for `run`).
         #[arg(long, value_name = "OPTIONS", allow_hyphen_values = true)]
         petsc_options: Option<String>,
+        /// Number of subdomains of faer-substructured (as for `run`).
+        #[arg(long, value_name = "K")]
+        subdomains: Option<usize>,
         #[arg(long)]
         threads: Option<usize>,
         /// Also draw the run time against the true residual, one marker per backend, into
@@ -274,6 +282,7 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             resume,
             threads: n,
             solver,
+            subdomains,
             petsc_options,
             quiet,
             no_plots,
@@ -290,6 +299,7 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             let mut prog = progress::CliProgress::new(quiet, log_json && rank == 0);
             let opts = solve::BackendOptions {
                 petsc_options: petsc_options.unwrap_or_default(),
+                subdomains,
             };
             let mut backend = solve::backend_with(&solver, &opts)?;
             let saved = resume.as_deref().map(output::read_checkpoint).transpose()?;
@@ -516,11 +526,13 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             scene: file,
             solvers,
             petsc_options,
+            subdomains,
             threads: n,
             plot,
             csv,
         } => {
             threads(n)?;
+            subdomains.map(solve::check_subdomains).transpose()?;
             let t0 = std::time::Instant::now();
             let sc = scene::load(&file)?;
             let m = mesh::build(&sc);
@@ -543,6 +555,7 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             }
             let opts = solve::BackendOptions {
                 petsc_options: petsc_options.unwrap_or_default(),
+                subdomains,
             };
             let rows = solve::bench::bench(&k, &f, &m, &names, &opts);
             println!(

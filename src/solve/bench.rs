@@ -69,7 +69,12 @@ fn run_one(
     opts: &BackendOptions,
     row: &mut BenchRow,
 ) -> Result<(), String> {
-    let mut be = backend_with(name, opts).map_err(|e| e.to_string())?;
+    // --subdomains is for the substructured backend only
+    let own = BackendOptions {
+        subdomains: opts.subdomains.filter(|_| name == super::SUBSTRUCTURED),
+        ..opts.clone()
+    };
+    let mut be = backend_with(name, &own).map_err(|e| e.to_string())?;
     super::configure(be.as_mut(), mesh).map_err(|e| e.to_string())?;
     let t = Instant::now();
     be.analyze(&k.pattern).map_err(|e| e.to_string())?;

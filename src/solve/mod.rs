@@ -1,8 +1,20 @@
 //! Linear backend selection (the PETSc pattern: chosen at run time by name, a backend not
 //! compiled in is an error, not a crash).
 
-pub use dfem_ffi::FfiOptions as BackendOptions;
 pub use dfem_kernels::{LinearBackend, SolveError, BACKENDS};
+
+/// The options of a backend beyond its name (`dfem run` / `dfem bench-solvers`).
+#[derive(Debug, Clone, Default)]
+pub struct BackendOptions {
+    /// Options for PETSc's database when the backend is `petsc` (`--petsc-options`).
+    pub petsc_options: String,
+    /// Number of subdomains of `faer-substructured` (`--subdomains K`, K ≥ 1; default 2).
+    /// Refused with any other backend.
+    pub subdomains: Option<usize>,
+}
+
+/// The backend that takes `--subdomains`.
+pub(crate) const SUBSTRUCTURED: &str = "faer-substructured";
 
 /// Default backend: faer's supernodal Cholesky (LLᵀ) with the symbolic phase cached.
 pub const DEFAULT: &str = "faer-cholesky";
@@ -22,6 +34,16 @@ pub fn available_names() -> Vec<&'static str> {
     BACKENDS.iter().chain(dfem_ffi::BACKENDS).copied().collect()
 }
 
+/// Refuses a number of subdomains (`--subdomains K`) below 1.
+pub fn check_subdomains(k: usize) -> crate::Result<()> {
+    if k == 0 {
+        return Err(crate::Error::new("--subdomains must be at least 1 (got 0)")
+            .place("option --subdomains")
+            .fix("give a positive number of subdomains, e.g. --subdomains 2 (one per core)"));
+    }
+    Ok(())
+}
+
 /// Build a backend from its name (`--solver`) with default options.
 pub fn backend(name: &str) -> crate::Result<Box<dyn LinearBackend>> {
     backend_with(name, &BackendOptions::default())
@@ -29,7 +51,25 @@ pub fn backend(name: &str) -> crate::Result<Box<dyn LinearBackend>> {
 
 /// Build a backend from its name (`--solver`) and options (`--petsc-options`).
 pub fn backend_with(name: &str, opts: &BackendOptions) -> crate::Result<Box<dyn LinearBackend>> {
-    if let Some(built) = dfem_ffi::backend_from_name(name, opts) {
+    if let Some(k) = opts.subdomains {
+        if name != SUBSTRUCTURED {
+            return Err(crate::Error::new(format!(
+                "--subdomains applies to --solver {SUBSTRUCTURED} only, not to '{name}'"
+            ))
+            .place("option --subdomains")
+            .fix(format!(
+                "add `--solver {SUBSTRUCTURED}` or drop --subdomains"
+            )));
+        }
+        check_subdomains(k)?;
+        return Ok(Box::new(
+            dfem_kernels::FaerCholeskySubstructured::new().with_subdomains(k),
+        ));
+    }
+    let ffi = dfem_ffi::FfiOptions {
+        petsc_options: opts.petsc_options.clone(),
+    };
+    if let Some(built) = dfem_ffi::backend_from_name(name, &ffi) {
         return built.map_err(|e| {
             let feature = dfem_ffi::ALL
                 .iter()

@@ -150,6 +150,7 @@ pub fn solve_with_options(sc: &Scene, name: &str, petsc_options: &str) -> (Mesh,
     let m = mesh::build(sc);
     let opts = dfem::solve::BackendOptions {
         petsc_options: petsc_options.to_string(),
+        ..Default::default()
     };
     let mut backend =
         dfem::solve::backend_with(name, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));

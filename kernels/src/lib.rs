@@ -23,6 +23,7 @@ pub mod csr;
 pub mod faer_backend;
 pub mod mm;
 pub mod ordering;
+mod partial;
 pub mod pcg;
 pub mod split;
 pub mod substructure;

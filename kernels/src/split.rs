@@ -160,11 +160,16 @@ impl Half {
         })
     }
 
-    /// Copies the values from A and factorizes.
-    pub(crate) fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
+    /// Copies the values of K from A.
+    pub(crate) fn load(&mut self, a: &CsrMatrix) {
         for (v, &p) in self.values.values.iter_mut().zip(&self.value_map) {
             *v = a.values[p];
         }
+    }
+
+    /// Copies the values from A and factorizes.
+    pub(crate) fn factorize(&mut self, a: &CsrMatrix) -> Result<(), SolveError> {
+        self.load(a);
         self.core.factorize(&self.values).map_err(|e| match e {
             SolveError::NotPositiveDefinite { index, pivot } => SolveError::NotPositiveDefinite {
                 index: self.dofs[index] as usize,

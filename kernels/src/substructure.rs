@@ -54,6 +54,7 @@ use crate::backend::{LinearBackend, SolveError, SolverStats};
 use crate::csr::{CsrMatrix, CsrPattern};
 use crate::faer_backend::same_bits;
 use crate::ordering::{metis_bisection_partition, FillOrdering};
+use crate::partial::{col_mut, PartialLlt};
 use crate::split::{Half, InteriorOrder};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch, LltError};
@@ -62,7 +63,8 @@ use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::{Accum, Mat, MatMut, MatRef, Par};
+use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
+use faer::{Accum, Mat, MatRef, Par};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -119,13 +121,16 @@ pub struct SubstructureStats {
     pub interface_seconds: f64,
 }
 
-/// A subdomain: Kᵢ and its factor.
+/// A subdomain: Kᵢ and its factor's columns of the interior.
 struct Leaf {
     half: Half,
-    /// `(k, l, t)` with k ≥ l: entry t of Kᵢ's values is (Bᵢ\[k\], Bᵢ\[l\]).
-    b_map: Vec<(u32, u32, usize)>,
-    /// L_BB of Kᵢ's factor, dense (permuted Bᵢ order).
-    lss: Mat<f64>,
+    /// The partial factorization of Kᵢ (interior columns; values in the half's factor).
+    partial: PartialLlt,
+    /// Local unknown of Kᵢ → its position in the factor's order.
+    perm_inv: Vec<u32>,
+    /// Scratch vector of the solves (factor order); between the forward and the backward
+    /// solve it holds the interior's y.
+    v: Vec<f64>,
     /// Interior solution of the last backward solve (interior order).
     x: Vec<f64>,
     /// Wall time (inside its task) of the last refactorization, s: sparse factorization,
@@ -253,7 +258,7 @@ impl Node {
     /// passes up on `bnd` (the term to subtract from the parent's right-hand side).
     fn forward(&mut self, b: &[f64]) -> Vec<f64> {
         match &mut self.kind {
-            Kind::Leaf(leaf) => leaf.half.forward(b, &leaf.lss),
+            Kind::Leaf(leaf) => leaf.forward(b),
             Kind::Front(front) => {
                 let ws: Vec<Vec<f64>> = match front.children.as_mut_slice() {
                     [x, y] => {
@@ -295,7 +300,7 @@ impl Node {
     /// the nodes (see [`Node::scatter`]).
     fn backward(&mut self, xb: &[f64]) {
         match &mut self.kind {
-            Kind::Leaf(leaf) => leaf.x = leaf.half.backward(xb, &leaf.lss),
+            Kind::Leaf(leaf) => leaf.x = leaf.backward(xb),
             Kind::Front(front) => {
                 let o = front.own.len();
                 let (l, x) = front.m.as_ref().split_at_row(o);
@@ -408,15 +413,7 @@ impl Node {
     fn memory_bytes(&self) -> usize {
         let own = 8 * self.c.nrows() * self.c.ncols();
         own + match &self.kind {
-            Kind::Leaf(l) => {
-                let lv = l
-                    .half
-                    .core
-                    .analysis
-                    .as_ref()
-                    .map_or(0, |a| a.l_values.len());
-                8 * (lv + l.half.values.values.len() + l.lss.nrows() * l.lss.ncols())
-            }
+            Kind::Leaf(l) => 8 * (l.partial.n_values() + l.half.values.values.len()),
             Kind::Front(f) => {
                 8 * f.m.nrows() * f.m.ncols()
                     + f.children.iter().map(Node::memory_bytes).sum::<usize>()
@@ -432,57 +429,72 @@ fn front_flops(o: usize, b: usize) -> f64 {
     o * o * o / 6.0 + b * o * o / 2.0 + b * b * o / 2.0
 }
 
-fn col_mut(v: &mut [f64]) -> MatMut<'_, f64> {
-    let n = v.len();
-    MatMut::from_column_major_slice_mut(v, n, 1)
-}
-
 impl Leaf {
-    /// Multiply-adds of a refactorization: the sparse factor of Kᵢ and the lower half of
-    /// L_BB L_BBᵀ (|B|³/6).
+    /// Multiply-adds of a refactorization: the partial factorization of Kᵢ (its interior
+    /// columns, the Schur complement's products included; [`PartialLlt::flops`]).
     fn flops(&self) -> f64 {
-        let nb = (self.half.dofs.len() - self.half.n_int) as f64;
-        self.half.core.analysis.as_ref().map_or(0.0, |a| a.flops()) + nb * nb * nb / 6.0
+        self.partial.flops()
     }
 
-    /// Sparse factorization of Kᵢ and its Schur complement Cᵢ (lower, Bᵢ order), with
-    /// the smallest interior pivot ratio.
+    /// Partial factorization of Kᵢ (interior columns) and what its Schur complement
+    /// subtracts from the interface, Cᵢ = L_BI L_BIᵀ = A_BᵢIᵢ A_IᵢIᵢ⁻¹ A_IᵢBᵢ (lower, Bᵢ
+    /// order), with the smallest interior pivot ratio.
     fn refactorize(&mut self, cx: Ctx<'_>) -> Result<(Mat<f64>, (f64, usize)), SolveError> {
         let (t, cpu) = (Instant::now(), thread_cpu_seconds());
-        self.half.factorize(cx.a)?;
+        self.half.load(cx.a);
+        let an = self.half.core.analysis.as_mut().expect("analyzed");
+        let cp = self
+            .partial
+            .factorize(&self.half.values.values, &mut an.l_values, cx.leaf_par)
+            .map_err(|p| SolveError::NotPositiveDefinite {
+                index: self.half.dofs[an.original(p)] as usize,
+                pivot: f64::NAN,
+            })?;
         let pivots = self
             .half
             .interior_min_pivot_ratio(|g| cx.a.values[cx.diag_pos[g]]);
         let t_factor = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        self.lss = self.half.trailing_block();
-        let ns = self.lss.nrows();
-        // D = L_BB L_BBᵀ (lower triangle), then C = K_BB − D
-        let mut d = Mat::<f64>::zeros(ns, ns);
-        tri_matmul(
-            d.as_mut(),
-            BlockStructure::TriangularLower,
-            Accum::Replace,
-            self.lss.as_ref(),
-            BlockStructure::TriangularLower,
-            self.lss.transpose(),
-            BlockStructure::TriangularUpper,
-            1.0,
-            cx.leaf_par,
-        );
         let sp = &self.half.s_pos;
+        let ns = sp.len();
         let mut c = Mat::<f64>::zeros(ns, ns);
         for l in 0..ns {
             for k in l..ns {
-                c[(k, l)] = -d[(sp[k].max(sp[l]), sp[k].min(sp[l]))];
+                c[(k, l)] = cp[(sp[k].max(sp[l]), sp[k].min(sp[l]))];
             }
-        }
-        for &(k, l, t) in &self.b_map {
-            c[(k as usize, l as usize)] += self.half.values.values[t];
         }
         self.times = (t_factor, t.elapsed().as_secs_f64());
         self.cpu = thread_cpu_seconds() - cpu;
         Ok((c, pivots))
+    }
+
+    /// Forward solve of the interior with the global right-hand side `b` (zero on Bᵢ);
+    /// returns L_BI y in Bᵢ order (the coupling term of the global forward solve).
+    fn forward(&mut self, b: &[f64]) -> Vec<f64> {
+        let h = &self.half;
+        self.v.fill(0.0);
+        for (&g, &p) in h.dofs[..h.n_int].iter().zip(&self.perm_inv) {
+            self.v[p as usize] = b[g as usize];
+        }
+        let an = h.core.analysis.as_ref().expect("analyzed");
+        self.partial.forward(&an.l_values, &mut self.v);
+        // v_B = −L_BI y
+        h.s_pos.iter().map(|&p| -self.v[h.n_int + p]).collect()
+    }
+
+    /// Backward solve after [`Leaf::forward`] given the solution `xb` on Bᵢ (Bᵢ order);
+    /// returns the interior unknowns in interior order.
+    fn backward(&mut self, xb: &[f64]) -> Vec<f64> {
+        let h = &self.half;
+        for (&p, &x) in h.s_pos.iter().zip(xb) {
+            self.v[h.n_int + p] = x;
+        }
+        let an = h.core.analysis.as_ref().expect("analyzed");
+        self.partial.backward(&an.l_values, &mut self.v);
+        self.perm_inv[..h.n_int]
+            .iter()
+            .map(|&p| self.v[p as usize])
+            .collect()
     }
 }
 
@@ -670,18 +682,25 @@ fn build(
     match plan {
         Plan::Leaf { interior, bnd } => {
             let half = Half::new(pattern, interior, &bnd, order, threads)?;
-            let ni = half.n_int;
+            let an = half.core.analysis.as_ref().expect("analyzed");
+            let nl = half.dofs.len();
+            let perm_inv: Vec<u32> = match an.symbolic.perm() {
+                Some(p) => p.arrays().1.to_vec(),
+                None => (0..nl as u32).collect(),
+            };
+            let SymbolicCholeskyRaw::Supernodal(sym) = an.symbolic.raw() else {
+                return Err(SolveError::Other("substructuring: not supernodal".into()));
+            };
             let kp = &half.values.pattern;
-            let mut b_map = Vec::new();
-            for r in ni..kp.n() {
+            let entries = (0..nl).flat_map(|r| {
                 let start = kp.row_ptr()[r];
-                for (t, &c) in kp.row_cols(r).iter().enumerate() {
-                    let c = c as usize;
-                    if c >= ni && c <= r {
-                        b_map.push(((r - ni) as u32, (c - ni) as u32, start + t));
-                    }
-                }
-            }
+                let pi = &perm_inv;
+                kp.row_cols(r)
+                    .iter()
+                    .enumerate()
+                    .map(move |(t, &c)| (pi[r] as usize, pi[c as usize] as usize, start + t))
+            });
+            let partial = PartialLlt::new(sym, half.n_int, entries)?;
             Ok(Node {
                 bnd,
                 c: Mat::zeros(0, 0),
@@ -689,8 +708,9 @@ fn build(
                 min_pivot: (f64::INFINITY, 0),
                 kind: Kind::Leaf(Box::new(Leaf {
                     half,
-                    b_map,
-                    lss: Mat::zeros(0, 0),
+                    partial,
+                    v: vec![0.0; perm_inv.len()],
+                    perm_inv,
                     x: Vec::new(),
                     times: (-1.0, -1.0),
                     cpu: 0.0,
@@ -952,12 +972,7 @@ impl LinearBackend for FaerCholeskySubstructured {
         an.root.visit(
             &mut |l| {
                 leaf_flops.push(l.flops());
-                let nnz = l
-                    .half
-                    .core
-                    .analysis
-                    .as_ref()
-                    .map_or(0, |a| a.l_values.len());
+                let nnz = l.partial.n_values();
                 leaves.push((
                     l.half.dofs.len(),
                     l.half.n_int,

@@ -20,9 +20,11 @@
 //! * **subdomains** (leaves): the principal sub-matrix Kᵢ = A\[Iᵢ ∪ Bᵢ, Iᵢ ∪ Bᵢ\] of the
 //!   interior Iᵢ (the rest of part i) and the interface unknowns Bᵢ coupled to it, ordered
 //!   with Iᵢ first (METIS nested dissection of Iᵢ by default, or AMD) and Bᵢ last,
-//!   factorized by faer, one rayon task per subdomain. The trailing block of Kᵢ = Lᵢ Lᵢᵀ
-//!   gives its Schur complement Cᵢ = A_BᵢIᵢ A_IᵢIᵢ⁻¹ A_IᵢBᵢ = K_BᵢBᵢ − Lᵢ,BB Lᵢ,BBᵀ
-//!   (dense, |Bᵢ| × |Bᵢ|);
+//!   one rayon task per subdomain: a partial factorization on faer's symbolic structure
+//!   ([`crate::partial`]) computes the interior columns \[Lᵢ,II; Lᵢ,BI\] of Kᵢ's
+//!   Cholesky factor and stops before Bᵢ, leaving what the subdomain subtracts from
+//!   the interface, Cᵢ = A_BᵢIᵢ A_IᵢIᵢ⁻¹ A_IᵢBᵢ = Lᵢ,BI Lᵢ,BIᵀ (dense, |Bᵢ| × |Bᵢ|) —
+//!   no Cholesky of Kᵢ's trailing block;
 //! * **interface fronts** (inner nodes): the dense matrix M on (Γ, B) — B the ancestors'
 //!   interface unknowns coupled inside the node — holds A_ΓΓ and A_BΓ minus the children's
 //!   Schur complements (in child order). Its partial Cholesky factorization (faer's dense
@@ -48,7 +50,7 @@
 //! and every sum over children is in child order, so the results are bit-identical for
 //! any number of threads. `min_pivot_ratio` is that of the global factorization in the
 //! order above: the smallest L_jj² / a_jj over the interiors and the interfaces. A
-//! non-positive pivot is reported at its unknown (`pivot` NaN when it is in a front).
+//! non-positive pivot is reported at its unknown (`pivot` NaN).
 
 use crate::backend::{LinearBackend, SolveError, SolverStats};
 use crate::csr::{CsrMatrix, CsrPattern};
@@ -82,8 +84,8 @@ pub struct SubstructureStats {
     pub subdomain_interface_sizes: Vec<usize>,
     /// (|Γ|, |B|) of each interface front, depth first (root last), last analysis.
     pub front_sizes: Vec<(usize, usize)>,
-    /// Multiply-adds of each subdomain's refactorization (sparse factorization of Kᵢ and
-    /// the product L_BB L_BBᵀ of its Schur complement), last analysis.
+    /// Multiply-adds of each subdomain's refactorization (the partial factorization of Kᵢ,
+    /// its interior columns with the product L_BI L_BIᵀ), last analysis.
     pub subdomain_flops: Vec<f64>,
     /// Multiply-adds of each front (partial Cholesky: |Γ|³/6 + |B| |Γ|²/2 + |B|² |Γ|/2),
     /// in the order of `front_sizes`.
@@ -115,7 +117,8 @@ pub struct SubstructureStats {
     /// Sparse factorizations of the subdomains, summed over subdomains (wall time inside
     /// each task), s.
     pub subdomain_factor_seconds: f64,
-    /// Schur complements of the subdomains (trailing block and its product), summed, s.
+    /// Schur complements of the subdomains (L_BI L_BIᵀ brought to Bᵢ order; its products
+    /// are in the partial factorization), summed, s.
     pub schur_seconds: f64,
     /// Interface fronts: assembly and dense partial factorization, summed over fronts, s.
     pub interface_seconds: f64,

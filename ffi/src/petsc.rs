@@ -19,7 +19,8 @@
 //! ‖b − A x‖ / ‖b‖ recomputed here from dfem's copy of A.
 //!
 //! Distributed (feature `mpi`, under `mpirun`): every rank holds the same matrix (dfem
-//! assembles it redundantly) and calls the backend with the same arguments; the unknowns
+//! assembles each rank's rows on that rank and exchanges them, `dfem::assembly::Ranks`)
+//! and calls the backend with the same arguments; the unknowns
 //! are partitioned over the ranks by the partition given with
 //! [`LinearBackend::set_partition`] (dfem's block partition, `dfem::solve::block_partition`:
 //! whole blocks, cuts along joints — the subdomains of `faer-substructured` come from the

@@ -95,7 +95,7 @@ fn bind_petsc(includes: &[PathBuf]) {
         .allowlist_function("KSP(Create|SetOperators|SetType|GetType|GetPC|SetTolerances|SetFromOptions|SetUp|Solve|GetIterationNumber|GetConvergedReason|GetResidualNorm|Destroy|SetNormType|SetInitialGuessNonzero)")
         .allowlist_function("PC(SetType|GetType|FactorGetMatrix)")
         .allowlist_function("MPI_Comm_(rank|size)")
-        .allowlist_function("MPI_(Allreduce|Bcast|Barrier)")
+        .allowlist_function("MPI_(Allreduce|Allgatherv|Bcast|Barrier)")
         .allowlist_function("dfem_.*")
         .allowlist_var("PETSC_COMM_WORLD")
         .allowlist_type("MatInfo|MatInfoType|InsertMode|ScatterMode|MatAssemblyType|KSPConvergedReason|MatOption|PetscBool")

@@ -29,8 +29,10 @@ int dfem_mumps_comm(void) {
   if (!init) MPI_Init(NULL, NULL);
   return (int)MPI_Comm_c2f(MPI_COMM_SELF);
 }
+int dfem_mumps_comm_world(void) { return (int)MPI_Comm_c2f(MPI_COMM_WORLD); }
 #else
 int dfem_mumps_comm(void) { return -987654; }
+int dfem_mumps_comm_world(void) { return -987654; }
 #endif
 #else
 size_t dfem_dmumps_struc_size(void) { return 0; }
@@ -38,6 +40,7 @@ size_t dfem_dmumps_offset_info(void) { return 0; }
 size_t dfem_dmumps_offset_pivnul_list(void) { return 0; }
 size_t dfem_dmumps_offset_metis_options(void) { return 0; }
 int dfem_mumps_comm(void) { return 0; }
+int dfem_mumps_comm_world(void) { return 0; }
 #endif
 
 void dfem_blas_single_thread(void) {

@@ -23,6 +23,7 @@ size_t dfem_dmumps_offset_metis_options(void);
 /* Fortran handle of MPI_COMM_SELF for MUMPS' COMM_FORTRAN (initializes MPI when needed in
  * the MPI build; -987654, MUMPS' "use comm world", in the sequential one). */
 int dfem_mumps_comm(void);
+int dfem_mumps_comm_world(void);
 /* OpenBLAS (behind MUMPS and PETSc) on one thread, if it is the BLAS loaded: results then do
  * not depend on its thread count, and its spinning threads do not compete with rayon's. */
 void dfem_blas_single_thread(void);

@@ -5,8 +5,10 @@
 //! * `petsc`: [`petsc::Petsc`], PETSc's KSP (Krylov method + preconditioner chosen in
 //!   PETSc's options database, default CG + GAMG with the rigid-body near-null space)
 //!   through bindgen.
-//! * `mpi`: the PETSc backend solves on every rank of `mpirun` together (rows partitioned
-//!   with METIS), see [`petsc`].
+//! * `mpi`: under `mpirun`, the PETSc backend and (with `mumps`) MUMPS solve on every rank
+//!   together, each rank giving the rows of its part of dfem's block partition (MUMPS'
+//!   distributed input, ICNTL(18) = 3), see [`petsc`] and [`mumps`]; [`allgather`] and
+//!   [`process_rank`] serve dfem's distributed assembly.
 //!
 //! [`backend_from_name`] builds them by name; [`BACKENDS`] lists the names compiled in.
 //! Without features the crate is empty apart from the registry, which then explains which
@@ -96,6 +98,28 @@ pub fn process_rank() -> (usize, usize) {
     #[cfg(not(feature = "mpi"))]
     {
         (0, 1)
+    }
+}
+
+/// Concatenates the `local` values of every process of a distributed run, in rank order,
+/// into `out` on every process: process r contributes `counts[r]` values (`counts[rank]`
+/// is `local.len()`, `out.len()` the sum of `counts`). With one process, a copy; several
+/// processes need feature `mpi` (under `mpirun`, [`process_rank`] tells).
+pub fn allgather(local: &[f64], counts: &[usize], out: &mut [f64]) -> Result<(), String> {
+    #[cfg(feature = "mpi")]
+    {
+        petsc::allgather(local, counts, out).map_err(|e| e.to_string())
+    }
+    #[cfg(not(feature = "mpi"))]
+    {
+        if counts.len() != 1 || out.len() != local.len() || counts[0] != local.len() {
+            return Err(format!(
+                "allgather over {} processes needs a dfem built with feature `mpi`",
+                counts.len()
+            ));
+        }
+        out.copy_from_slice(local);
+        Ok(())
     }
 }
 

@@ -17,6 +17,18 @@
 //! One process: the sequential library (`libdmumps_seq`) or, when PETSc is compiled in, the
 //! MPI library on MPI_COMM_SELF. Calls into MUMPS are serialized by a process-wide lock
 //! (its Fortran run time is not re-entrant across instances on different threads).
+//!
+//! Distributed (feature `mpi`, under `mpirun` with N > 1 processes): one MUMPS instance
+//! on MPI_COMM_WORLD (PAR = 1, the host works too), with MUMPS' distributed assembled
+//! input (ICNTL(18) = 3): each process gives only the entries of its own rows
+//! (IRN_loc, JCN_loc, A_loc; for the symmetric factorizations the entries on or above the
+//! diagonal of its rows, so each entry of the upper triangle comes from one process), its
+//! rows being the unknowns of its part of the partition given with
+//! [`LinearBackend::set_partition`] (dfem's block partition, the same as the assembly's and
+//! PETSc's), or else N contiguous ranges. The analysis (ordering) runs on the host
+//! (ICNTL(28) = 1), factorization and solve on all processes; the right-hand side is
+//! centralized on the host (rank 0's copy is used) and the solution, centralized on the
+//! host (ICNTL(21) = 0), is broadcast to every process, as PETSc's backend returns it.
 
 use crate::mumps_sys::{self, DmumpsStrucC};
 use dfem_kernels::{same_bits, CsrMatrix, CsrPattern, LinearBackend, SolveError, SolverStats};
@@ -65,6 +77,38 @@ pub struct Mumps {
     last: Option<Vec<f64>>,
     factorized: bool,
     stats: SolverStats,
+    /// This process's rank and the number of processes of a distributed instance
+    /// (`(0, 1)`: one process, centralized input).
+    rank: usize,
+    size: usize,
+    /// The partition of the unknowns over the processes given by `set_partition`.
+    partition: Option<Vec<u32>>,
+}
+
+/// Rank and number of processes of a distributed MUMPS: those of `mpirun` with feature
+/// `mpi` (MPI started with PETSc), else `(0, 1)`.
+fn rank_and_size() -> Result<(usize, usize), SolveError> {
+    #[cfg(all(mumps_mpi, feature = "mpi"))]
+    {
+        crate::petsc::rank_and_size()
+    }
+    #[cfg(not(all(mumps_mpi, feature = "mpi")))]
+    {
+        Ok((0, 1))
+    }
+}
+
+/// Overwrites `values` with rank 0's on every process (distributed instances only).
+fn broadcast(values: &mut [f64]) -> Result<(), SolveError> {
+    #[cfg(all(mumps_mpi, feature = "mpi"))]
+    {
+        crate::petsc::broadcast(values)
+    }
+    #[cfg(not(all(mumps_mpi, feature = "mpi")))]
+    {
+        let _ = values;
+        Ok(())
+    }
 }
 
 // SAFETY: the raw pointers inside the MUMPS structure point into this value's own vectors
@@ -76,6 +120,7 @@ impl Mumps {
     /// match this binding).
     pub fn new(symmetry: Symmetry) -> Result<Self, SolveError> {
         mumps_sys::check_layout().map_err(SolveError::Other)?;
+        let (rank, size) = rank_and_size()?;
         // SAFETY: DmumpsStrucC is plain data (integers, floats, null pointers, chars).
         let inst: Box<DmumpsStrucC> = Box::new(unsafe { std::mem::zeroed() });
         let mut m = Self {
@@ -94,6 +139,9 @@ impl Mumps {
                 last_true_residual: f64::NAN,
                 ..Default::default()
             },
+            rank,
+            size,
+            partition: None,
         };
         m.inst.sym = match symmetry {
             Symmetry::Symmetric => 2,
@@ -112,6 +160,10 @@ impl Mumps {
                 mumps_sys::dfem_mumps_comm()
             }
         });
+        if size > 1 {
+            // SAFETY: returns an integer handle (MPI was started by rank_and_size).
+            m.inst.comm_fortran = unsafe { mumps_sys::dfem_mumps_comm_world() };
+        }
         m.call(-1)?;
         m.initialized = true;
         // ICNTL(1..4): no output; ICNTL(24): null pivot detection, CNTL(3) its threshold.
@@ -121,7 +173,29 @@ impl Mumps {
         m.inst.icntl[3] = 0;
         m.inst.icntl[23] = 1;
         m.inst.cntl[2] = NULL_PIVOT_THRESHOLD;
+        if size > 1 {
+            // ICNTL(18) = 3: distributed assembled input; ICNTL(28) = 1: sequential analysis
+            m.inst.icntl[17] = 3;
+            m.inst.icntl[27] = 1;
+        }
         Ok(m)
+    }
+
+    /// Number of processes the instance works on (1 unless distributed).
+    pub fn processes(&self) -> usize {
+        self.size
+    }
+
+    /// Whether this process gives row `i` of a matrix of `n` rows: all of them on one
+    /// process; else those of its part of the given partition, or its contiguous range.
+    fn owns(&self, i: usize, n: usize) -> bool {
+        if self.size <= 1 {
+            return true;
+        }
+        match &self.partition {
+            Some(p) if p.len() == n => p[i] as usize == self.rank,
+            _ => i * self.size / n.max(1) == self.rank,
+        }
     }
 
     /// Runs one MUMPS job and turns INFOG(1) < 0 into an error with its meaning.
@@ -229,7 +303,8 @@ impl LinearBackend for Mumps {
         self.jcn.clear();
         self.src.clear();
         let upper_only = self.symmetry != Symmetry::General;
-        for i in 0..n {
+        let owned: Vec<bool> = (0..n).map(|i| self.owns(i, n)).collect();
+        for i in (0..n).filter(|&i| owned[i]) {
             let start = pattern.row_ptr()[i];
             for (k, &j) in pattern.row_cols(i).iter().enumerate() {
                 if upper_only && (j as usize) < i {
@@ -242,11 +317,19 @@ impl LinearBackend for Mumps {
         }
         self.a = vec![0.0; self.src.len()];
         self.inst.n = n as i32;
-        self.inst.nnz = self.irn.len() as i64;
         self.inst.nz = 0;
-        self.inst.irn = self.irn.as_mut_ptr();
-        self.inst.jcn = self.jcn.as_mut_ptr();
-        self.inst.a = self.a.as_mut_ptr();
+        if self.size > 1 {
+            self.inst.nnz_loc = self.irn.len() as i64;
+            self.inst.nz_loc = 0;
+            self.inst.irn_loc = self.irn.as_mut_ptr();
+            self.inst.jcn_loc = self.jcn.as_mut_ptr();
+            self.inst.a_loc = self.a.as_mut_ptr();
+        } else {
+            self.inst.nnz = self.irn.len() as i64;
+            self.inst.irn = self.irn.as_mut_ptr();
+            self.inst.jcn = self.jcn.as_mut_ptr();
+            self.inst.a = self.a.as_mut_ptr();
+        }
         self.pattern = None;
         self.factorized = false;
         self.last = None;
@@ -273,7 +356,11 @@ impl LinearBackend for Mumps {
         for (dst, &s) in self.a.iter_mut().zip(&self.src) {
             *dst = a.values[s];
         }
-        self.inst.a = self.a.as_mut_ptr();
+        if self.size > 1 {
+            self.inst.a_loc = self.a.as_mut_ptr();
+        } else {
+            self.inst.a = self.a.as_mut_ptr();
+        }
         self.call_with_retries(2)?;
         self.stats.numeric_factorizations += 1;
         self.stats.numeric_seconds += t0.elapsed().as_secs_f64();
@@ -281,11 +368,20 @@ impl LinearBackend for Mumps {
         // INFOG(22): megabytes actually used by the factorization (all processes)
         self.stats.memory_bytes = self.inst.infog[21].max(0) as usize * 1_000_000;
         let nulls = self.inst.infog[27];
-        if nulls > 0 && !self.inst.pivnul_list.is_null() {
-            // SAFETY: MUMPS allocated PIVNUL_LIST with INFOG(28) entries (1-based rows).
-            let first = unsafe { *self.inst.pivnul_list };
+        if nulls > 0 {
+            // SAFETY: MUMPS allocated PIVNUL_LIST with INFOG(28) entries (1-based rows), on
+            // the host (INFOG is global: every process comes here together)
+            let first = if self.rank == 0 && !self.inst.pivnul_list.is_null() {
+                unsafe { *self.inst.pivnul_list }
+            } else {
+                1
+            };
+            let mut first = [f64::from(first)];
+            if self.size > 1 {
+                broadcast(&mut first)?;
+            }
             self.stats.min_pivot_ratio = 0.0;
-            self.stats.min_pivot_index = (first - 1).max(0) as usize;
+            self.stats.min_pivot_index = (first[0] as i64 - 1).max(0) as usize;
         } else {
             self.stats.min_pivot_ratio = f64::NAN;
             self.stats.min_pivot_index = 0;
@@ -320,10 +416,17 @@ impl LinearBackend for Mumps {
         self.inst.nrhs = 1;
         self.inst.lrhs = n as i32;
         self.inst.icntl[19] = 0; // ICNTL(20): dense right-hand side
-        self.inst.icntl[20] = 0; // ICNTL(21): centralized solution (in rhs)
+        self.inst.icntl[20] = 0; // ICNTL(21): centralized solution (in rhs, on the host)
+        if self.rank != 0 {
+            // the right-hand side and the solution live on the host only
+            self.inst.rhs = std::ptr::null_mut();
+        }
         let r = self.call(3);
         self.inst.rhs = std::ptr::null_mut();
         r?;
+        if self.size > 1 {
+            broadcast(rhs)?;
+        }
         self.stats.solves += 1;
         self.stats.solve_seconds += t0.elapsed().as_secs_f64();
         if rhs.iter().any(|v| !v.is_finite()) {
@@ -336,5 +439,27 @@ impl LinearBackend for Mumps {
 
     fn stats(&self) -> &SolverStats {
         &self.stats
+    }
+
+    fn partition_parts(&self) -> Option<usize> {
+        (self.size > 1).then_some(self.size)
+    }
+
+    fn set_partition(&mut self, part: &[u32]) -> Result<(), SolveError> {
+        if self.size > 1 && self.partition.as_deref() != Some(part) {
+            if part.iter().any(|&p| p as usize >= self.size) {
+                return Err(SolveError::Other(format!(
+                    "MUMPS: a partition into parts up to {} for {} processes",
+                    part.iter().max().map_or(0, |&p| p),
+                    self.size
+                )));
+            }
+            self.partition = Some(part.to_vec());
+            // the local entries follow the partition: analyze again at the next factorization
+            self.pattern = None;
+            self.factorized = false;
+            self.last = None;
+        }
+        Ok(())
     }
 }

@@ -104,6 +104,8 @@ extern "C" {
     fn dfem_dmumps_offset_metis_options() -> usize;
     /// Fortran communicator for `comm_fortran` (MPI_COMM_SELF; MPI initialized if needed).
     pub fn dfem_mumps_comm() -> c_int;
+    /// Fortran communicator MPI_COMM_WORLD (MPI build, MPI started), for distributed runs.
+    pub fn dfem_mumps_comm_world() -> c_int;
     /// OpenBLAS on one thread (a no-op with another BLAS).
     pub fn dfem_blas_single_thread();
 }

@@ -19,7 +19,8 @@
 //! ‖b − A x‖ / ‖b‖ recomputed here from dfem's copy of A.
 //!
 //! Distributed (feature `mpi`, under `mpirun`): every rank holds the same matrix (dfem
-//! assembles it redundantly) and calls the backend with the same arguments; the unknowns
+//! assembles each rank's rows on that rank and exchanges them, `dfem::assembly::Ranks`)
+//! and calls the backend with the same arguments; the unknowns
 //! are partitioned over the ranks by the partition given with
 //! [`LinearBackend::set_partition`] (dfem's block partition, `dfem::solve::block_partition`:
 //! whole blocks, cuts along joints — the subdomains of `faer-substructured` come from the
@@ -126,6 +127,77 @@ pub fn rank_and_size() -> Result<(usize, usize), SolveError> {
     Ok((r as usize, s as usize))
 }
 
+/// Concatenates the `local` values of every rank, in rank order, into `out` on every rank
+/// (`MPI_Allgatherv` on the communicator of the solves): rank r contributes `counts[r]`
+/// values (`counts[rank] == local.len()`, `out.len()` the sum of `counts`). One process:
+/// a copy.
+pub fn allgather(local: &[f64], counts: &[usize], out: &mut [f64]) -> Result<(), SolveError> {
+    init()?;
+    let total: usize = counts.iter().sum();
+    if out.len() != total || total > c_int::MAX as usize {
+        return Err(SolveError::Other(format!(
+            "allgather: {} values to gather into {} places (at most {})",
+            total,
+            out.len(),
+            c_int::MAX
+        )));
+    }
+    let counts: Vec<c_int> = counts.iter().map(|&c| c as c_int).collect();
+    let mut displs = vec![0 as c_int; counts.len()];
+    for r in 1..counts.len() {
+        displs[r] = displs[r - 1] + counts[r - 1];
+    }
+    let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    // SAFETY: `local` holds this rank's count of doubles and `out` the sum of all counts,
+    // laid out by `displs`; the same counts on every rank.
+    let code = unsafe {
+        sys::MPI_Allgatherv(
+            local.as_ptr().cast(),
+            local.len() as c_int,
+            sys::dfem_type_double(),
+            out.as_mut_ptr().cast(),
+            counts.as_ptr(),
+            displs.as_ptr(),
+            sys::dfem_type_double(),
+            comm(),
+        )
+    };
+    mpi_ok(code, "MPI_Allgatherv")
+}
+
+/// Overwrites `values` on every rank with rank 0's (`MPI_Bcast` on the communicator of
+/// the solves; the same length on every rank).
+pub fn broadcast(values: &mut [f64]) -> Result<(), SolveError> {
+    init()?;
+    if values.len() > c_int::MAX as usize {
+        return Err(SolveError::Other(format!(
+            "broadcast of {} values exceeds MPI's 32-bit counts",
+            values.len()
+        )));
+    }
+    let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    // SAFETY: `values.len()` doubles on every rank.
+    let code = unsafe {
+        sys::MPI_Bcast(
+            values.as_mut_ptr().cast(),
+            values.len() as c_int,
+            sys::dfem_type_double(),
+            0,
+            comm(),
+        )
+    };
+    mpi_ok(code, "MPI_Bcast")
+}
+
+/// An MPI return code as a result.
+fn mpi_ok(code: c_int, what: &str) -> Result<(), SolveError> {
+    if code == 0 {
+        Ok(())
+    } else {
+        Err(SolveError::Other(format!("{what} failed ({code})")))
+    }
+}
+
 /// Ends PETSc and MPI if they were started. Every [`Petsc`] must be dropped before.
 pub fn finalize() {
     if INIT.get().is_some() {
@@ -190,9 +262,7 @@ impl Layout {
                     comm(),
                 )
             };
-            if code != 0 {
-                return Err(SolveError::Other(format!("MPI_Bcast failed ({code})")));
-            }
+            mpi_ok(code, "MPI_Bcast")?;
         }
         let mut counts = vec![0usize; size + 1];
         for &p in &part {

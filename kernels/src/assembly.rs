@@ -500,6 +500,31 @@ impl AssemblyPlan {
         kernel: F,
         out: &mut CsrMatrix,
     ) {
+        self.assemble_groups_of(form, groups, base, None, kernel, out);
+    }
+
+    /// [`Self::assemble_groups`] over the elements `e` with `active[e]` only (all of them
+    /// with `None`): the others are skipped, their kernel never called. The rows every
+    /// element of which (every element with a slot at the row's unknown) is active come
+    /// out bit-identical to those of [`Self::assemble_groups`] (the same additions in the
+    /// same order); the values of the other rows are unspecified. A distributed run
+    /// assembles the rows of its own unknowns this way, `active` marking the elements
+    /// that touch one of them.
+    ///
+    /// # Panics
+    /// As [`Self::assemble_groups`], or if `active` does not have one flag per element.
+    pub fn assemble_groups_of<F: Fn(usize, &mut [f64]) + Sync>(
+        &self,
+        form: Form,
+        groups: Range<usize>,
+        base: Option<&CsrMatrix>,
+        active: Option<&[bool]>,
+        kernel: F,
+        out: &mut CsrMatrix,
+    ) {
+        if let Some(a) = active {
+            assert_eq!(a.len(), self.n_elements(), "one flag per element");
+        }
         self.check_pattern(out);
         assert!(
             groups.start <= groups.end && groups.end <= self.n_groups(),
@@ -531,17 +556,19 @@ impl AssemblyPlan {
         }
         let colours = self.group_colour[groups.start]..self.group_colour[groups.end];
         match form {
-            Form::Packed => self.run::<PACKED, F>(colours, &kernel, values),
-            Form::Symmetrised => self.run::<SYMMETRISED, F>(colours, &kernel, values),
-            Form::Unsymmetric => self.run::<UNSYMMETRIC, F>(colours, &kernel, values),
+            Form::Packed => self.run::<PACKED, F>(colours, &kernel, active, values),
+            Form::Symmetrised => self.run::<SYMMETRISED, F>(colours, &kernel, active, values),
+            Form::Unsymmetric => self.run::<UNSYMMETRIC, F>(colours, &kernel, active, values),
         }
     }
 
-    /// Runs the colours `colours` in order, each colour's chunks in parallel.
+    /// Runs the colours `colours` in order, each colour's chunks in parallel, skipping the
+    /// elements not `active` (when given).
     fn run<const FORM: u8, F: Fn(usize, &mut [f64]) + Sync>(
         &self,
         colours: Range<usize>,
         kernel: &F,
+        active: Option<&[bool]>,
         values: SharedValues,
     ) {
         let buffer_len = |m: usize| {
@@ -562,6 +589,9 @@ impl AssemblyPlan {
                     let paired = self.paired[e];
                     let map = &self.map[s..s + map_len(m, paired)];
                     s += map.len();
+                    if active.is_some_and(|a| !a[e]) {
+                        continue;
+                    }
                     // SAFETY (both scatters): chunks of one colour share no unknown, so this
                     // thread is the only one touching these positions, all within the values
                     if paired && m == 6 {

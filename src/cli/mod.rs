@@ -314,9 +314,9 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                 }
             }
             prog.stage("meshing");
-            let m = mesh::build(&sc);
+            let mut m = mesh::build(&sc);
             check_memory(&sc, &m, memory_limit)?;
-            solve::configure(backend.as_mut(), &m)
+            solve::configure_run(backend.as_mut(), &mut m)
                 .map_err(|e| Error::new(e.to_string()).place("option --solver"))?;
             if rank != 0 {
                 analysis::run_with(

@@ -203,10 +203,60 @@ pub fn configure(
     backend: &mut dyn LinearBackend,
     mesh: &crate::mesh::Mesh,
 ) -> Result<(), SolveError> {
+    configure_with(backend, mesh, None)
+}
+
+/// [`configure`], plus `known`: a partition of the unknowns into `known.0` parts already
+/// computed, handed over instead of computing it again when the backend asks for as many.
+fn configure_with(
+    backend: &mut dyn LinearBackend,
+    mesh: &crate::mesh::Mesh,
+    known: Option<(usize, &[u32])>,
+) -> Result<(), SolveError> {
     backend.set_near_null_space(&rigid_body_modes(mesh))?;
-    if let Some(k) = backend.partition_parts() {
-        backend.set_partition(&block_partition(mesh, k)?)?;
+    match (backend.partition_parts(), known) {
+        (Some(k), Some((parts, part))) if k == parts => backend.set_partition(part)?,
+        (Some(k), _) => backend.set_partition(&block_partition(mesh, k)?)?,
+        (None, _) => {}
     }
+    Ok(())
+}
+
+/// [`configure`] for the run of this process (`dfem run`). Under `mpirun` with N > 1
+/// processes (feature `mpi`), also distributes the assembly: the unknowns are split by
+/// [`block_partition`] into N parts, process r's part goes into `mesh.ranks`
+/// ([`crate::assembly::Ranks`]: its assembly evaluates only the elements of its own rows,
+/// then the processes exchange their rows), and a distributed backend (one that asks for
+/// N parts: PETSc, MUMPS) gets the same partition for its rows. Serial: [`configure`].
+pub fn configure_run(
+    backend: &mut dyn LinearBackend,
+    mesh: &mut crate::mesh::Mesh,
+) -> Result<(), SolveError> {
+    let (rank, size) = dfem_ffi::process_rank();
+    if size <= 1 {
+        return configure(backend, mesh);
+    }
+    let part = block_partition(mesh, size)?;
+    // every process must split the rows alike (METIS is deterministic for the same
+    // input; checked, since a mismatch would garble the exchanged rows)
+    let h = part
+        .iter()
+        .fold(0x811c_9dc5u32, |h, &p| (h ^ p).wrapping_mul(0x0100_0193));
+    let mut all = vec![0.0; size];
+    dfem_ffi::allgather(&[f64::from(h)], &vec![1; size], &mut all).map_err(SolveError::Other)?;
+    if all.iter().any(|&x| x != f64::from(h)) {
+        return Err(SolveError::Other(
+            "the processes computed different block partitions (METIS differs between \
+             them); run every process on the same machine type"
+                .into(),
+        ));
+    }
+    configure_with(backend, mesh, Some((size, &part)))?;
+    mesh.ranks = Some(std::sync::Arc::new(crate::assembly::Ranks {
+        part,
+        rank: rank as u32,
+        size: size as u32,
+    }));
     Ok(())
 }
 

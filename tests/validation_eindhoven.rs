@@ -30,6 +30,17 @@
 //! * the experimental peak of J4D/J5D, about 50 kN: Lourenço (1996) as the earlier
 //!   version of this test cited it; not verified. The peaks of J6D and J7D could not be
 //!   found with the tools at hand, and no test asserts them (docs/performance.md).
+//! * the J4D experimental curve drawn in the figure ([`J4D_DIGITISED`]): a third party's
+//!   digitisation, not a primary source. The public repository ameerhamza-cell/urm-wall-fem
+//!   (file urm_validation_j4d.py, commit 649f4812) lists ten points "digitised from
+//!   published load-displacement plots; uncertainty ≈ ±8 kN", stated as an "approximate
+//!   digitisation from Lourenço 1994, Fig. 5.8" of Raijmakers and Vermeltfoort's J4D,
+//!   and cites "Petracca et al. (2017, Table 2: V_max = 57 kN)" for the peak. Neither
+//!   the figure nor the table could be opened to check them (the searches of 25 November
+//!   2026 over the stored pages, documentation, code and issues found no copy of
+//!   Lourenço 1994/1996, Lourenço and Rots 1997 or Petracca et al. 2017 beyond their
+//!   opening pages), so the 57 kN is shown, not asserted: it and the 50 kN above differ
+//!   by 14 %, more than the 10 % the issue asks for, and which is right is open.
 //!
 //! The fast test runs J4D with bricks meshed at 0.052 m (half a brick's height) under
 //! displacement control to 1.5 mm: the peak (first maximum) within 10 % of 50 kN, and
@@ -46,6 +57,20 @@ use dfem::scene::Scene;
 
 /// The experimental peak of J4D/J5D (N), see the header.
 const J4D_PEAK: f64 = 50e3;
+/// The J4D experimental curve as digitised by a third party (header): (top displacement
+/// mm, horizontal load kN), stated uncertainty ±8 kN; unverified against the source.
+const J4D_DIGITISED: [(f64, f64); 10] = [
+    (0.0, 0.0),
+    (0.2, 18.0),
+    (0.4, 34.0),
+    (0.7, 48.0),
+    (1.0, 57.0),
+    (1.4, 54.0),
+    (1.8, 48.0),
+    (2.2, 42.0),
+    (2.6, 38.0),
+    (3.0, 35.0),
+];
 /// The compressive strength of the cap (Pa) and its initial yield value fₘ/3.
 const FC: f64 = 10.5e6;
 
@@ -84,6 +109,11 @@ fn curve(out: &Outcome) -> Vec<[f64; 3]> {
             [p.displacement[0] - d0, r[0], r[1]]
         })
         .collect()
+}
+
+/// The largest load of [`J4D_DIGITISED`] (kN).
+fn digitised_peak() -> f64 {
+    J4D_DIGITISED.iter().map(|p| p.1).fold(0.0, f64::max)
 }
 
 /// The first maximum of the load: the largest load before it falls by 0.2 % (N), its
@@ -243,6 +273,11 @@ fn eindhoven_j4d_peak_and_failure_pattern() {
         "{:?}",
         out.status
     );
+    eprintln!(
+        "J4D peak against the candidate references (header): {:+.1} % against 50 kN, {:+.1} % against the digitised 57 kN",
+        100.0 * (peak - J4D_PEAK) / J4D_PEAK,
+        100.0 * (peak / 1e3 - digitised_peak()) / digitised_peak()
+    );
     // the peak against the experiment (header): 10 %
     assert!(
         (peak - J4D_PEAK).abs() < 0.1 * J4D_PEAK,
@@ -350,7 +385,8 @@ fn eindhoven_walls_sweep_table_and_figure() {
         100.0 * (p013 - p026) / p026
     );
     // the figure: the finer of the two meshes of each wall solid, the coarser dashed,
-    // and the J4D/J5D peak ± 10 % (the J6D and J7D peaks could not be found: header)
+    // the J4D/J5D peak ± 10 % and the digitised J4D curve (the J6D and J7D peaks could
+    // not be found: header)
     let names = [
         ("eindhoven", "J4D/J5D, 0.30 N/mm²"),
         ("eindhoven-j6d", "J6D, 1.21 N/mm²"),
@@ -368,11 +404,19 @@ fn eindhoven_walls_sweep_table_and_figure() {
                 points: r.pts.iter().map(|p| (p[0] * 1e3, p[1] / 1e3)).collect(),
                 color: c,
                 dashed,
+                markers: false,
             });
         }
     }
+    curves.push(dfem::output::plot::CurveSeries {
+        label: "J4D experiment, third-party digitisation (± 8 kN; unverified)".into(),
+        points: J4D_DIGITISED.to_vec(),
+        color: 0,
+        dashed: false,
+        markers: true,
+    });
     let bands = [dfem::output::plot::Band {
-        label: "J4D/J5D experiment, about 50 kN (Lourenço 1996), ± 10 %".into(),
+        label: "J4D/J5D peak, about 50 kN (Lourenço 1996, unverified), ± 10 %".into(),
         load: J4D_PEAK / 1e3,
         width: 0.1,
         color: 0,

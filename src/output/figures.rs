@@ -819,6 +819,16 @@ fn draw_curve<DB: DrawingBackend>(
     Ok(())
 }
 
+/// The legend's font size (px). plotters 0.3's TrueType text (`src/style/font/ttf.rs`,
+/// `draw`) rasterizes every glyph on its own square canvas whose left edge is the pen
+/// position, so the ink of a glyph with a negative left side bearing is cut off in the
+/// bitmap backend: DejaVu Sans (what "sans-serif" resolves to here) draws its "J" with
+/// the hook left of the pen, and at 12 px (the legend's default) and below the "J" of
+/// "J4D" came out as a comma. At 13 and 14 px the "J" is whole (checked by eye on the
+/// PNG of docs/figures/eindhoven_walls; a lowercase "j" still loses its hook at 13 px).
+/// The SVG backend writes text, not pixels, and is unaffected.
+const LEGEND_FONT_PX: f64 = 13.0;
+
 /// The legend of a chart as every figure draws it: at `pos`, in a white box with a black
 /// border that lets the grid show through a little.
 pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
@@ -828,6 +838,7 @@ pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::Coor
     chart
         .configure_series_labels()
         .position(pos)
+        .label_font(("sans-serif", LEGEND_FONT_PX))
         .background_style(WHITE.mix(0.9))
         .border_style(BLACK)
         .draw()

@@ -127,6 +127,9 @@ pub struct CurveSeries {
     pub color: usize,
     /// Dashed (a coarser model of the same wall).
     pub dashed: bool,
+    /// Drawn as its points (squares, 4 px) joined by a thin line: a reference curve
+    /// digitised from a published figure, not a computed one.
+    pub markers: bool,
 }
 
 /// A reference band of [`load_displacement_chart`]: a load (kN) with a relative width
@@ -219,18 +222,33 @@ fn draw_load_displacement<DB: DrawingBackend>(
     for s in curves {
         let c = CURVE_COLORS[s.color % CURVE_COLORS.len()];
         let style = c.stroke_width(if s.dashed { 1 } else { 2 });
-        let series = if s.dashed {
-            chart
-                .draw_series(DashedLineSeries::new(s.points.iter().copied(), 6, 4, style))
-                .map_err(e)?
+        let series =
+            if s.markers {
+                chart
+                    .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(1)))
+                    .map_err(e)?;
+                chart
+                    .draw_series(s.points.iter().map(|&p| {
+                        EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], c.filled())
+                    }))
+                    .map_err(e)?
+            } else if s.dashed {
+                chart
+                    .draw_series(DashedLineSeries::new(s.points.iter().copied(), 6, 4, style))
+                    .map_err(e)?
+            } else {
+                chart
+                    .draw_series(LineSeries::new(s.points.iter().copied(), style))
+                    .map_err(e)?
+            };
+        let series = series.label(s.label.clone());
+        if s.markers {
+            series.legend(move |(x, y)| {
+                EmptyElement::at((x, y)) + Rectangle::new([(-4, -4), (4, 4)], c.filled())
+            });
         } else {
-            chart
-                .draw_series(LineSeries::new(s.points.iter().copied(), style))
-                .map_err(e)?
-        };
-        series
-            .label(s.label.clone())
-            .legend(move |(x, y)| PathElement::new([(x - 10, y), (x + 10, y)], style));
+            series.legend(move |(x, y)| PathElement::new([(x - 10, y), (x + 10, y)], style));
+        }
     }
     super::figures::draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
     root.present().map_err(e)?;

@@ -110,7 +110,7 @@ impl RowExchange {
 
     /// Sets the rows of `out` from `all`, every process's [`Self::pack`] in rank order.
     pub(super) fn unpack(&self, all: &[f64], out: &mut CsrMatrix) {
-        let rp = out.pattern.row_ptr().to_vec();
+        let rp = out.pattern.row_ptr();
         let mut at = 0;
         for &i in &self.order {
             let r = rp[i as usize]..rp[i as usize + 1];

@@ -72,10 +72,15 @@ fn serial_and_two_ranks(name: &str, scene_text: &str, solver: &str) -> u64 {
         "{}",
         String::from_utf8_lossy(&serial.stderr)
     );
+    // one program per rank (MPMD), each with its own output directory, so that anything
+    // rank 1 wrote would show
     let par = Command::new("mpirun")
-        .args(["--allow-run-as-root", "--oversubscribe", "-n", "2"])
+        .args(["--allow-run-as-root", "--oversubscribe", "-n", "1"])
         .arg(&bin)
         .args(args("two"))
+        .args([":", "-n", "1"])
+        .arg(&bin)
+        .args(args("rank1"))
         .output()
         .expect("mpirun (OpenMPI) must be on PATH for the mpi tests");
     assert!(
@@ -104,8 +109,18 @@ fn serial_and_two_ranks(name: &str, scene_text: &str, solver: &str) -> u64 {
         diff / scale
     );
     assert!(diff <= 1e-6 * scale, "difference {:e} of {scale:e}", diff);
-    // rank 1 wrote nothing: only one set of results
-    assert!(!dir.join("two").join("figures").exists());
+    assert_eq!(s["stats"]["processes"], 1);
+    assert_eq!(p["stats"]["processes"], 2, "the run did not go on 2 ranks");
+    // rank 1 reports and writes nothing: rank 0 alone writes the results
+    let rank1 = dir.join("rank1");
+    let written: Vec<_> = std::fs::read_dir(&rank1)
+        .map(|d| d.flatten().map(|e| e.file_name()).collect())
+        .unwrap_or_default();
+    assert!(
+        written.is_empty(),
+        "rank 1 wrote {written:?} in {}",
+        rank1.display()
+    );
     s["stats"]["dofs"].as_u64().unwrap()
 }
 

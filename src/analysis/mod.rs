@@ -69,6 +69,9 @@ pub struct Stats {
     /// Stored entries of the last factor of the linear backend (its memory is 8 bytes
     /// each plus indices); 0 for iterative backends.
     pub factor_nnz: usize,
+    /// MPI processes whose rows made the matrices (`mpirun -n N`: N, each assembling its
+    /// own rows, [`crate::assembly::Ranks`]); 1 for a serial run.
+    pub processes: usize,
     /// Peak resident memory of the process at the end of the analysis (MB, 10⁶ bytes),
     /// `None` where the operating system does not tell ([`crate::resources`]).
     pub peak_memory_mb: Option<f64>,
@@ -198,7 +201,7 @@ pub fn run_with(
         }
         AnalysisType::Dynamic => dynamics::run(scene, mesh, backend, monitor),
     }?;
-    record_resources(&mut out, backend);
+    record_resources(&mut out, mesh, backend);
     Ok(out)
 }
 
@@ -211,12 +214,13 @@ pub fn resume_with(
     from: checkpoint::Checkpoint,
 ) -> Result<Outcome> {
     let mut out = dynamics::run_from(scene, mesh, backend, monitor, Some(from))?;
-    record_resources(&mut out, backend);
+    record_resources(&mut out, mesh, backend);
     Ok(out)
 }
 
 /// The factor size and the peak memory of the process, into the outcome's stats.
-fn record_resources(out: &mut Outcome, backend: &dyn LinearBackend) {
+fn record_resources(out: &mut Outcome, mesh: &Mesh, backend: &dyn LinearBackend) {
+    out.stats.processes = mesh.ranks.as_ref().map_or(1, |r| r.size as usize);
     out.stats.factor_nnz = backend.stats().factor_nnz;
     out.stats.peak_memory_mb = crate::resources::peak_resident_bytes().map(|b| b as f64 / 1e6);
 }

@@ -122,6 +122,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "min_pivot_ratio": s.min_pivot_ratio,
             "factor_nnz": s.factor_nnz,
             "peak_memory_mb": s.peak_memory_mb,
+            "processes": s.processes,
             "wall_time_s": s.wall_time_s,
         },
         "warnings": scene.warnings,

@@ -22,9 +22,21 @@
 //! median time against a full refactorization. Every solution is compared with
 //! faer-cholesky's (max-norm relative difference). The tables are markdown,
 //! with the load average before and after.
+//!
+//! `--secant 0.0002,0.001,0.01` measures instead the cost of a secant iteration of the
+//! static driver (issue 6) on the deformable wall: those fractions of the contacts change
+//! state (every 1/fraction-th contact, alternately opening and slipping), and for each
+//! the table gives the update of the matrix (`System::stiffness_update`, re-assembling
+//! only the changed contacts) against a whole assembly, the correction by conjugate
+//! gradients preconditioned with the factorization of the matrix before the change
+//! (`solve::reuse::solve_with_factor`, relative tolerance 1e-10, at most `--pcg-max`
+//! iterations) with its iterations and true residual, and the numeric refactorization
+//! plus solve the driver does instead when more than a few contacts changed, all against
+//! one numeric refactorization of the same matrix (faer-cholesky, AMD, one thread).
 
 use dfem::analysis;
-use dfem::assembly::System;
+use dfem::assembly::{diagonal, LocalStiffness, System};
+use dfem::solve::reuse::solve_with_factor;
 use dfem::solve::{block_partition, configure, LinearBackend};
 use dfem_kernels::{
     max_relative_difference, CsrMatrix, FaerCholesky, FaerCholeskySubstructured, FillOrdering,
@@ -149,6 +161,101 @@ fn time_backend<B: LinearBackend + ?Sized>(
     }
 }
 
+/// Relative true residual ‖f − K x‖₂ / ‖f‖₂.
+fn true_residual(k: &CsrMatrix, x: &[f64], f: &[f64]) -> f64 {
+    let mut kx = vec![0.0; x.len()];
+    k.mul_vec(x, &mut kx);
+    let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|a| a * a).sum::<f64>().sqrt();
+    norm(&mut f.iter().zip(&kx).map(|(a, b)| a - b)) / norm(&mut f.iter().copied())
+}
+
+/// The `--secant` table (see the module's documentation).
+fn secant_iteration(
+    sc: &dfem::scene::Scene,
+    m: &dfem::mesh::Mesh,
+    system: &System,
+    fractions: &[f64],
+    reps: usize,
+    pcg_max: usize,
+) {
+    let springs = analysis::elastic_springs(sc, m);
+    let local0: Vec<LocalStiffness> = springs.iter().map(|&s| diagonal(s)).collect();
+    let mut k = CsrMatrix::zeros(system.plan.pattern().clone());
+    // twice: from the second assembly on one geometry the triangles' part is kept, as in
+    // the driver's iterations within an increment
+    system.stiffness_into(m, &local0, &mut k);
+    system.stiffness_into(m, &local0, &mut k);
+    let f = analysis::external_load(sc, m);
+    let mut held = FaerCholesky::new();
+    held.factorize(&k).expect("factorization");
+    let mut fresh = FaerCholesky::new();
+    fresh.factorize(&k).expect("factorization");
+    let (mut wall, mut cpu): (Vec<f64>, Vec<f64>) = (1..=reps)
+        .map(|r| {
+            let a = scaled(&k, r);
+            let (_, w, c) = timed(|| fresh.factorize(&a).expect("refactorization"));
+            (w, c)
+        })
+        .unzip();
+    let (refactor, refactor_cpu) = (median(&mut wall), median(&mut cpu));
+    let mut x = f.clone();
+    let (_, solve, solve_cpu) = timed(|| fresh.solve(&mut x).expect("solve"));
+    println!(
+        "# deformable wall: {} unknowns, {} contacts, factor {} entries; numeric refactorization (faer-cholesky, AMD, 1 thread), median of {reps}: {refactor:.3} s wall, {refactor_cpu:.2} s CPU; one solve {solve:.3} s wall, {solve_cpu:.2} s CPU\n",
+        k.pattern.n(),
+        local0.len(),
+        fresh.stats().factor_nnz
+    );
+    println!("| contacts changed | share | whole assembly (s) | update (s) | PCG on the old factor: iterations | PCG (s) | PCG true residual | update + PCG / refactorization | (CPU) | refactorization + solve (s) | its true residual | update + refactorization + solve / refactorization | (CPU) |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let nc = local0.len();
+    for &share in fractions {
+        let every = ((1.0 / share).round() as usize).max(1);
+        let mut local = local0.clone();
+        let changed: Vec<usize> = (0..nc).step_by(every).collect();
+        for (i, &c) in changed.iter().enumerate() {
+            let kn = local0[c][0][0];
+            // alternately an opening contact (nothing) and a slipping one (no shear)
+            local[c] = if i % 2 == 0 {
+                [[0.0; 2]; 2]
+            } else {
+                [[kn, 0.0], [0.0, 0.0]]
+            };
+        }
+        let mut whole = k.clone();
+        let (_, t_whole, _) = timed(|| system.stiffness_into(m, &local, &mut whole));
+        let mut upd = k.clone();
+        let (_, t_upd, c_upd) = timed(|| system.stiffness_update(m, &local0, &local, &mut upd));
+        assert!(
+            upd.values
+                .iter()
+                .zip(&whole.values)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "the update differs from a whole assembly"
+        );
+        let (pcg, t_pcg, c_pcg) = timed(|| solve_with_factor(&upd, &mut held, &f, 1e-10, pcg_max));
+        let (its, pcg_res) = match &pcg {
+            Some(o) => (o.iterations.to_string(), true_residual(&upd, &o.x, &f)),
+            None => (format!("> {pcg_max}"), f64::NAN),
+        };
+        let mut x = f.clone();
+        let (_, t_ref, c_ref) = timed(|| {
+            fresh.factorize(&upd).expect("refactorization");
+            fresh.solve(&mut x).expect("solve");
+        });
+        println!(
+            "| {} | {:.2} % | {t_whole:.4} | {t_upd:.4} | {its} | {t_pcg:.3} | {pcg_res:.1e} | {:.2} | {:.2} | {t_ref:.3} | {:.1e} | {:.2} | {:.2} |",
+            changed.len(),
+            100.0 * changed.len() as f64 / nc as f64,
+            (t_upd + t_pcg) / refactor,
+            (c_upd + c_pcg) / refactor_cpu,
+            true_residual(&upd, &x, &f),
+            (t_upd + t_ref) / refactor,
+            (c_upd + c_ref) / refactor_cpu,
+        );
+    }
+}
+
 fn main() {
     let n: usize = arg("--n").map_or(300, |v| v.parse().expect("--n"));
     let rigid = arg("--kind").as_deref() == Some("rigid");
@@ -166,6 +273,16 @@ fn main() {
     let sc = wall_scene(n, rigid);
     let m = dfem::mesh::build(&sc);
     let system = System::new(&sc, &m);
+    if let Some(fractions) = arg("--secant") {
+        let fractions: Vec<f64> = fractions
+            .split(',')
+            .map(|v| v.parse().unwrap_or_else(|_| panic!("--secant: {v}")))
+            .collect();
+        let pcg_max = arg("--pcg-max").map_or(200, |v| v.parse().expect("--pcg-max"));
+        secant_iteration(&sc, &m, &system, &fractions, reps, pcg_max);
+        println!("\n# load average after: {}", load());
+        return;
+    }
     let springs = analysis::elastic_springs(&sc, &m);
     let k = system.stiffness(&m, &springs);
     let f = analysis::external_load(&sc, &m);

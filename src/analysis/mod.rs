@@ -47,10 +47,11 @@ pub struct Stats {
     /// Distinct contact sets a dynamic run went through (1 + the changes made by the
     /// search for new contacts, [`contact_search`]); each needs one symbolic analysis.
     pub contact_topologies: usize,
-    /// Secant corrections solved with an earlier factorization as preconditioner instead
-    /// of a refactorization (few contacts changed state).
+    /// Corrections solved with an earlier factorization as preconditioner instead of a
+    /// refactorization: secant ones (few contacts changed state) by conjugate gradients,
+    /// tangent ones of the secant strategy by GMRES on the secant factorization.
     pub reused_factorizations: usize,
-    /// Conjugate-gradient iterations of those corrections.
+    /// Conjugate-gradient and GMRES iterations of those corrections.
     pub reuse_iterations: usize,
     /// Increments of the secant strategy that went on with tangent (Newton) steps after
     /// the secant iterations stalled.

@@ -229,6 +229,14 @@ pub struct Driver<'a> {
     cur: Mesh,
     committed: Committed,
     kbuf: CsrMatrix,
+    /// The contacts' local stiffnesses `kbuf` was last assembled with on `cur`, with no
+    /// unknown pinned and nothing added since (`None`: unknown), for
+    /// [`System::stiffness_update`].
+    kbuf_local: Option<Vec<LocalStiffness>>,
+    /// Out-of-balance norm (N) that counts as converged in the current iteration
+    /// (tolerance × the force scale): a tangent correction by GMRES is solved to a tenth of
+    /// it ([`Driver::tangent_with_secant_factor`]).
+    converged_norm: f64,
     pub stats: Stats,
     backend: &'a mut dyn LinearBackend,
     lu: Option<Box<dyn LinearBackend>>,
@@ -284,6 +292,21 @@ enum Held {
 /// iteration (a solve pair and a product with K) costs a tenth to a twentieth of a numeric
 /// factorization on the walls of docs/performance.md.
 const REUSE_MAX_CHANGES: usize = 4;
+/// The iteration matrix is updated ([`System::stiffness_update`]) rather than assembled
+/// again when at most 1/`UPDATE_MAX_SHARE` of the contacts changed their local stiffness:
+/// the update finds the entries and elements a changed contact touches one by one, which
+/// on the rigid P2 wall of docs/performance.md costs more than assembling all contacts
+/// once 1/8 of them changed (a tangent step after a secant one changes every slipping
+/// contact's).
+const UPDATE_MAX_SHARE: usize = 32;
+/// GMRES iterations of a tangent correction preconditioned with the held secant
+/// factorization ([`Driver::tangent_with_secant_factor`]) after which the tangent matrix is
+/// factorized with LU instead: an LU factorization of the tangent costs about 4–5
+/// Cholesky factorizations of the secant matrix, or 40 preconditioned iterations, on the
+/// P2 wall of docs/performance.md.
+const TANGENT_MAX_ITERATIONS: usize = 30;
+/// The loosest relative residual of a tangent correction by GMRES.
+const TANGENT_TOLERANCE: f64 = 1e-3;
 /// Conjugate-gradient iterations after which the reused factorization stops paying and the
 /// secant matrix is refactorized.
 const REUSE_MAX_ITERATIONS: usize = 8;
@@ -346,6 +369,8 @@ impl<'a> Driver<'a> {
             cur: mesh.clone(),
             committed: Committed::zero(mesh),
             kbuf,
+            kbuf_local: None,
+            converged_norm: 0.0,
             stats: Stats {
                 dofs: mesh.n_dofs,
                 contacts: mesh.contacts.len(),
@@ -522,10 +547,13 @@ impl<'a> Driver<'a> {
             Strategy::Initial => Ok(self.solve_k0(&mut x)?.then_some(x)),
             Strategy::Secant | Strategy::Newton => {
                 let newton = self.settings.strategy == Strategy::Newton || tangent;
+                if newton && self.settings.strategy == Strategy::Secant {
+                    if let Some(x) = self.tangent_with_secant_factor(trial, states, r) {
+                        return Ok(Some(x));
+                    }
+                }
                 let local = self.local_stiffness(trial, states, newton);
-                self.system
-                    .stiffness_into(&self.cur, &local, &mut self.kbuf);
-                Self::pin_rows(&self.pins, &mut self.kbuf);
+                self.assemble_kbuf(local);
                 if !newton {
                     if let Some(x) = self.reuse(states, r) {
                         return Ok(Some(x));
@@ -551,6 +579,81 @@ impl<'a> Driver<'a> {
                 Ok((ok && !huge).then_some(x))
             }
         }
+    }
+
+    /// Assemble the iteration matrix for the contacts' local stiffnesses `local` into
+    /// `kbuf`, on the geometry of the last converged increment, with the pinned unknowns
+    /// taken out. When `kbuf` holds the matrix of the same geometry for other local
+    /// stiffnesses, only the contacts whose local stiffness changed are assembled again
+    /// ([`System::stiffness_update`]: bit-identical to a whole assembly).
+    fn assemble_kbuf(&mut self, local: Vec<LocalStiffness>) {
+        let few = |prev: &[LocalStiffness]| {
+            let changed = prev.iter().zip(&local).filter(|(a, b)| a != b).count();
+            UPDATE_MAX_SHARE * changed <= local.len()
+        };
+        match self.kbuf_local.take() {
+            Some(prev) if self.pins.is_empty() && few(&prev) => {
+                self.system
+                    .stiffness_update(&self.cur, &prev, &local, &mut self.kbuf)
+            }
+            _ => self
+                .system
+                .stiffness_into(&self.cur, &local, &mut self.kbuf),
+        }
+        if self.pins.is_empty() {
+            self.kbuf_local = Some(local);
+        } else {
+            Self::pin_rows(&self.pins, &mut self.kbuf);
+        }
+    }
+
+    /// The tangent correction K_t⁻¹ r of the secant strategy (a symmetric secant matrix
+    /// plus the slipping contacts' friction–normal coupling) by GMRES preconditioned with
+    /// the held secant factorization (factorized first, in `states`, when none is held),
+    /// instead of an LU factorization of K_t, which costs several Cholesky
+    /// factorizations. `None`: the caller factorizes K_t (GMRES did not converge within
+    /// [`TANGENT_MAX_ITERATIONS`], or the secant matrix is singular).
+    fn tangent_with_secant_factor(
+        &mut self,
+        trial: &Trial,
+        states: &[ContactState],
+        r: &[f64],
+    ) -> Option<Vec<f64>> {
+        if !matches!(self.held, Held::Secant(_)) {
+            let local = self.local_stiffness(trial, states, false);
+            self.assemble_kbuf(local);
+            self.held = Held::Nothing;
+            let ok = self.backend.factorize(&self.kbuf).is_ok()
+                && !super::singular_pivots(&*self.backend);
+            if !ok {
+                return None;
+            }
+            self.held = Held::Secant(states.to_vec());
+        }
+        let local = self.local_stiffness(trial, states, true);
+        self.assemble_kbuf(local);
+        // an inexact Newton step: the linear residual left is a tenth of what counts as
+        // converged (relative to ‖r‖: between REUSE_TOLERANCE and TANGENT_TOLERANCE), so
+        // that the step converges the increment as the exact one does, up to the
+        // nonlinearity, which the next iteration corrects either way
+        let rn = Self::norm(r);
+        let tolerance =
+            (0.1 * self.converged_norm / rn.max(1e-300)).clamp(REUSE_TOLERANCE, TANGENT_TOLERANCE);
+        let out = crate::solve::reuse::gmres_with_factor(
+            &self.kbuf,
+            &mut *self.backend,
+            r,
+            tolerance,
+            TANGENT_MAX_ITERATIONS,
+        )?;
+        // a step of the size of the model: K_t singular up to round-off, as in `correction`
+        let size = self.model_size();
+        if out.x.iter().any(|v| v.abs() > 0.1 * size) {
+            return None;
+        }
+        self.stats.reused_factorizations += 1;
+        self.stats.reuse_iterations += out.iterations;
+        Some(out.x)
     }
 
     /// The secant correction K_s⁻¹ r computed with the held secant factorization as a
@@ -594,6 +697,7 @@ impl<'a> Driver<'a> {
         let local = self.local_stiffness(trial, &trial.state, false);
         self.system
             .stiffness_into(&self.cur, &local, &mut self.kbuf);
+        self.kbuf_local = None;
         for (a, b) in self.kbuf.values.iter_mut().zip(&k0.values) {
             *a += eps * b;
         }
@@ -692,6 +796,7 @@ impl<'a> Driver<'a> {
             // the tolerance: contacts with no force (head joints under gravity) flip with
             // round-off
             let negligible = self.settings.tolerance * scale;
+            self.converged_norm = negligible;
             let changed = trial
                 .state
                 .iter()
@@ -787,9 +892,7 @@ impl<'a> Driver<'a> {
                 // out-of-balance force (slip/open cycling at a lightly loaded contact),
                 // take the secant step instead
                 let local = self.local_stiffness(&trial, &trial.state, false);
-                self.system
-                    .stiffness_into(&self.cur, &local, &mut self.kbuf);
-                Self::pin_rows(&self.pins, &mut self.kbuf);
+                self.assemble_kbuf(local);
                 let mut x = r.clone();
                 let ok = self.backend.factorize(&self.kbuf).is_ok()
                     && !super::singular_pivots(&*self.backend)
@@ -899,6 +1002,7 @@ impl<'a> Driver<'a> {
         self.committed.state = trial.state;
         self.committed.history = trial.history;
         self.cur = trial.mesh;
+        self.kbuf_local = None;
         for (t, p) in self.presc_total.iter_mut().zip(presc) {
             t[0] += p[0];
             t[1] += p[1];
@@ -1121,6 +1225,13 @@ pub fn run_with_progress<'a>(
                 .map_or(0, |l| l.stats().symbolic_factorizations);
         d.stats.min_pivot_ratio = bs.min_pivot_ratio;
         d.stats.wall_time_s = start.elapsed().as_secs_f64();
+        if super::tracing() {
+            eprintln!("solver {bs:?}");
+            if let Some(l) = d.lu.as_ref() {
+                eprintln!("solver (tangent LU) {:?}", l.stats());
+            }
+            eprintln!("analysis {} s", d.stats.wall_time_s);
+        }
         d.outcome(status, mesh, lf, mech)
     };
     let fail = |d: &mut Driver, what: String, lf: Option<f64>| -> Outcome {

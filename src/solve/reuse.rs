@@ -21,6 +21,26 @@ pub struct Reused {
     pub iterations: usize,
 }
 
+impl Reused {
+    /// The solution of a zero right-hand side.
+    fn zero(n: usize) -> Reused {
+        Reused {
+            x: vec![0.0; n],
+            iterations: 0,
+        }
+    }
+}
+
+/// ‖r − K x‖₂, with `kx` as scratch.
+fn residual_norm(k: &CsrMatrix, x: &[f64], r: &[f64], kx: &mut [f64]) -> f64 {
+    k.mul_vec(x, kx);
+    r.iter()
+        .zip(kx.iter())
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        .sqrt()
+}
+
 /// Solve `k · x = r` by conjugate gradients preconditioned with the factorization that
 /// `backend` holds (of a matrix close to `k`, both symmetric positive definite). Stops when
 /// ‖r − K x‖₂ ≤ `tolerance` ‖r‖₂ (the true residual, recomputed at the end); returns `None`
@@ -38,10 +58,7 @@ pub fn solve_with_factor(
     let n = r.len();
     let bnorm = dot(r, r).sqrt();
     if bnorm == 0.0 {
-        return Some(Reused {
-            x: vec![0.0; n],
-            iterations: 0,
-        });
+        return Some(Reused::zero(n));
     }
     let mut x = vec![0.0; n];
     let mut res = r.to_vec();
@@ -63,13 +80,7 @@ pub fn solve_with_factor(
         }
         if dot(&res, &res).sqrt() <= tolerance * bnorm {
             // confirm with the true residual (the recurrence drifts in round-off)
-            k.mul_vec(&x, &mut kp);
-            let true_res = r
-                .iter()
-                .zip(&kp)
-                .map(|(a, b)| (a - b) * (a - b))
-                .sum::<f64>()
-                .sqrt();
+            let true_res = residual_norm(k, &x, r, &mut kp);
             if true_res <= 10.0 * tolerance * bnorm && x.iter().all(|v| v.is_finite()) {
                 return Some(Reused { x, iterations: it });
             }
@@ -83,6 +94,98 @@ pub fn solve_with_factor(
         for i in 0..n {
             p[i] = z[i] + beta * p[i];
         }
+    }
+    None
+}
+
+/// Serial dot product (a fixed order: the same bits for any number of threads), for the
+/// many short reductions of [`gmres_with_factor`]'s orthogonalization, where a parallel
+/// one costs more in synchronization than it saves on a loaded 2-core machine.
+fn sdot(x: &[f64], y: &[f64]) -> f64 {
+    x.iter().zip(y).map(|(a, b)| a * b).sum()
+}
+
+/// Solve `k · x = r` for a nonsymmetric `k` (Newton's tangent, METHOD.md §4) by GMRES,
+/// right-preconditioned with the factorization that `backend` holds (of a nearby symmetric
+/// matrix: the secant stiffness, of which the tangent differs by the slipping contacts'
+/// friction–normal coupling). Full (unrestarted) Arnoldi with modified Gram–Schmidt and
+/// Givens rotations; it keeps the preconditioned vectors M⁻¹vⱼ, so x = Σ yⱼ M⁻¹vⱼ costs no
+/// further solve. Stops when the Arnoldi residual is ≤ `tolerance` ‖r‖₂ and then checks the
+/// true residual ‖r − K x‖₂ (≤ 10 `tolerance` ‖r‖₂); `None` when that takes more than
+/// `max_iterations` (each one preconditioner solve and one product with K), when a solve
+/// fails or when the result is not finite: the caller factorizes `k` itself. Memory: 2
+/// `max_iterations` vectors of the size of `r`. Deterministic for any number of threads
+/// (as [`solve_with_factor`]).
+pub fn gmres_with_factor(
+    k: &CsrMatrix,
+    backend: &mut dyn LinearBackend,
+    r: &[f64],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Option<Reused> {
+    let n = r.len();
+    let beta = sdot(r, r).sqrt();
+    if beta == 0.0 {
+        return Some(Reused::zero(n));
+    }
+    // Arnoldi basis V, preconditioned basis Z, Hessenberg columns after the rotations
+    let mut v: Vec<Vec<f64>> = vec![r.iter().map(|a| a / beta).collect()];
+    let mut z: Vec<Vec<f64>> = Vec::new();
+    let mut h: Vec<Vec<f64>> = Vec::new();
+    let mut rot: Vec<(f64, f64)> = Vec::new();
+    let mut g = vec![beta];
+    let mut w = vec![0.0; n];
+    for j in 0..max_iterations {
+        let mut zj = v[j].clone();
+        backend.solve(&mut zj).ok()?;
+        k.mul_vec(&zj, &mut w);
+        z.push(zj);
+        let mut hj = vec![0.0; j + 2];
+        for (i, vi) in v.iter().enumerate() {
+            let hij = sdot(&w, vi);
+            hj[i] = hij;
+            for (a, b) in w.iter_mut().zip(vi) {
+                *a -= hij * b;
+            }
+        }
+        let wn = sdot(&w, &w).sqrt();
+        hj[j + 1] = wn;
+        for (i, &(c, s)) in rot.iter().enumerate() {
+            let (a, b) = (hj[i], hj[i + 1]);
+            hj[i] = c * a + s * b;
+            hj[i + 1] = -s * a + c * b;
+        }
+        let d = hj[j].hypot(hj[j + 1]);
+        if !d.is_finite() || d == 0.0 {
+            return None;
+        }
+        let (c, s) = (hj[j] / d, hj[j + 1] / d);
+        hj[j] = d;
+        hj[j + 1] = 0.0;
+        rot.push((c, s));
+        g.push(-s * g[j]);
+        g[j] *= c;
+        h.push(hj);
+        let done = g[j + 1].abs() <= tolerance * beta || wn == 0.0;
+        if done || j + 1 == max_iterations {
+            // back substitution H y = g, then x = Z y
+            let m = j + 1;
+            let mut y = vec![0.0; m];
+            for i in (0..m).rev() {
+                let s: f64 = (i + 1..m).map(|l| h[l][i] * y[l]).sum();
+                y[i] = (g[i] - s) / h[i][i];
+            }
+            let mut x = vec![0.0; n];
+            for (zl, yl) in z.iter().zip(&y) {
+                for (a, b) in x.iter_mut().zip(zl) {
+                    *a += yl * b;
+                }
+            }
+            let true_res = residual_norm(k, &x, r, &mut w);
+            let ok = true_res <= 10.0 * tolerance * beta && x.iter().all(|a| a.is_finite());
+            return ok.then_some(Reused { x, iterations: m });
+        }
+        v.push(w.iter().map(|a| a / wn).collect());
     }
     None
 }
@@ -116,6 +219,27 @@ mod tests {
         m
     }
 
+    /// The right-hand side of the tests.
+    fn rhs() -> Vec<f64> {
+        (0..201).map(|i| ((i * 37) % 11) as f64 - 5.0).collect()
+    }
+
+    /// `a⁻¹ b` by `backend` (a direct one).
+    fn direct(mut backend: Box<dyn LinearBackend>, a: &CsrMatrix, b: &[f64]) -> Vec<f64> {
+        backend.factorize(a).unwrap();
+        let mut x = b.to_vec();
+        backend.solve(&mut x).unwrap();
+        x
+    }
+
+    /// Every entry of `x` within `tol` times the largest of `exact` of it.
+    fn assert_close(x: &[f64], exact: &[f64], tol: f64) {
+        let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (a, b) in x.iter().zip(exact) {
+            assert!((a - b).abs() <= tol * scale, "{a} vs {b}");
+        }
+    }
+
     #[test]
     fn a_rank_two_change_converges_in_three_iterations_to_the_direct_solution() {
         let k_old: Vec<f64> = (0..200).map(|i| 1.0 + (i % 7) as f64).collect();
@@ -124,12 +248,8 @@ mod tests {
         k_new[40] *= 0.1;
         k_new[150] *= 5.0;
         let (a_old, a_new) = (chain(&k_old), chain(&k_new));
-        let rhs: Vec<f64> = (0..201).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
-
-        let mut direct = FaerCholesky::new();
-        direct.factorize(&a_new).unwrap();
-        let mut exact = rhs.clone();
-        direct.solve(&mut exact).unwrap();
+        let rhs = rhs();
+        let exact = direct(Box::new(FaerCholesky::new()), &a_new, &rhs);
 
         let mut held = FaerCholesky::new();
         held.factorize(&a_old).unwrap();
@@ -137,11 +257,31 @@ mod tests {
         // CG preconditioned by the old factor: the preconditioned operator is the identity
         // plus a rank-2 term, so at most 3 iterations in exact arithmetic
         assert!(out.iterations <= 3, "{} iterations", out.iterations);
-        let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (a, b) in out.x.iter().zip(&exact) {
-            assert!((a - b).abs() <= 1e-9 * scale, "{a} vs {b}");
-        }
+        assert_close(&out.x, &exact, 1e-9);
         // too few iterations allowed: the caller is told to refactorize
         assert!(solve_with_factor(&a_new, &mut held, &rhs, 1e-12, 1).is_none());
+    }
+
+    #[test]
+    fn gmres_on_a_nonsymmetric_rank_two_change_matches_lu_in_three_iterations() {
+        let k: Vec<f64> = (0..200).map(|i| 1.0 + (i % 7) as f64).collect();
+        let sym = chain(&k);
+        // two one-sided couplings (a slipping contact's friction–normal term of Newton's
+        // tangent is one such entry): K = K_s + a rank-2 nonsymmetric change
+        let mut tangent = sym.clone();
+        tangent.add(40, 41, -0.6 * k[40]);
+        tangent.add(151, 150, 0.6 * k[150]);
+        let rhs = rhs();
+        let exact = direct(crate::solve::backend("faer-lu").unwrap(), &tangent, &rhs);
+
+        let mut held = FaerCholesky::new();
+        held.factorize(&sym).unwrap();
+        let out = gmres_with_factor(&tangent, &mut held, &rhs, 1e-12, 10).unwrap();
+        // right-preconditioned by K_s: K K_s⁻¹ = I + rank 2, so GMRES ends in at most 3
+        // iterations in exact arithmetic
+        assert!(out.iterations <= 3, "{} iterations", out.iterations);
+        assert_close(&out.x, &exact, 1e-10);
+        // too few iterations allowed: the caller factorizes the tangent itself
+        assert!(gmres_with_factor(&tangent, &mut held, &rhs, 1e-12, 1).is_none());
     }
 }

@@ -210,6 +210,7 @@ impl Driver<'_> {
             let local = self.tangent_local(trial);
             self.system
                 .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+            self.kbuf_local = None;
             Self::pin_rows(&self.pins, &mut self.kbuf);
             if self.lu.is_none() {
                 self.lu = Some(crate::solve::backend("faer-lu")?);
@@ -227,6 +228,7 @@ impl Driver<'_> {
         let local = self.local_stiffness(trial, &trial.state, false);
         self.system
             .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+        self.kbuf_local = None;
         Self::pin_rows(&self.pins, &mut self.kbuf);
         self.held = Held::Nothing;
         let ok = self.backend.factorize(&self.kbuf).is_ok()

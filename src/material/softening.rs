@@ -298,6 +298,31 @@ impl ContactLaw for Softening {
     }
 }
 
+/// The energy (J) a contact dissipates in an increment: the work of its returned force
+/// F₁ (N) on the plastic part of the increment of relative displacement Δδ (m),
+///
+/// ```text
+/// ΔD = Σⱼ F₁ⱼ (Δδⱼ − (F₁ⱼ − F₀ⱼ)/kⱼ),   j = normal, shear           (theory.md, Eq. A2)
+/// ```
+///
+/// with F₀ the committed force (N) and kⱼ the elastic springs (N/m) of
+/// [`ContactLaw::springs`]: the external work on the contact less the change of its
+/// elastic energy F²/(2k), with the plastic flow taken at the returned force, as the
+/// return mapping integrates it (backward Euler; METHOD.md §3). It is zero for an elastic
+/// increment and for a contact that opens with no force, and not negative for the flows
+/// of this law (associated on the tension surface and the cap, whose surfaces hold the
+/// origin; slip without dilatancy on the shear surface). Over a pull in tension it sums to
+/// G_f^I A up to the right-endpoint rule's error, fₜ Δu_p/(2 G_f^I) of it for plastic
+/// steps Δu_p. The laws without softening (the elastic band, Mohr–Coulomb) dissipate by the
+/// same rule, slip being their only plastic flow.
+///
+/// It is the constraint of the dissipation-based arc length (Gutiérrez 2004, Verhoosel et
+/// al. 2009) in src/analysis/statics/arc_length.rs.
+pub fn dissipation(k: ContactSprings, committed: [f64; 2], force: [f64; 2], d: [f64; 2]) -> f64 {
+    force[0] * (d[0] - (force[0] - committed[0]) / k.kn)
+        + force[1] * (d[1] - (force[1] - committed[1]) / k.ks)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -497,6 +522,36 @@ mod tests {
         // exp(−1000/72) ≈ 1e-6 is left
         assert!((work - 18.0).abs() < 1e-4 * 18.0, "work {work}");
         assert!((xi - 1.0).abs() < 1e-4, "xi {xi}");
+    }
+
+    /// [`dissipation`] over a pull in tension of a unit contact in steps of 1 µm to 1 mm:
+    /// zero on the elastic branch, positive at every step past the peak, and summing to
+    /// G_f^I less the right-endpoint rule's error, which for the falling σ(u_p) lies
+    /// between 0 and Σ (σᵢ₋₁ − σᵢ) Δu_p,ᵢ ≤ fₜ max Δu_p; the tail beyond 1 mm,
+    /// G_f^I exp(−fₜ u_p/G_f^I) ≈ 10⁻⁶ G_f^I, is left.
+    #[test]
+    fn dissipation_of_a_pull_sums_to_gf1() {
+        let m = eindhoven();
+        let k = m.springs(1.0);
+        let (mut f, mut h) = ([0.0, 0.0], [0.0; 2]);
+        let (mut sum, mut max_dup) = (0.0, 0.0f64);
+        let du = 1e-6;
+        for _ in 0..1000 {
+            let (g, st, h2) = m.update_history(1.0, f, h, [du, 0.0]);
+            let d = dissipation(k, f, g, [du, 0.0]);
+            if st == ContactState::Stick {
+                assert!(d.abs() < 1e-9, "elastic step dissipates {d}");
+            } else {
+                assert!(d > 0.0, "plastic step dissipates {d}");
+                max_dup = max_dup.max(du - (g[0] - f[0]) / k.kn);
+            }
+            sum += d;
+            (f, h) = (g, h2);
+        }
+        let (gf, ft) = (18.0, 0.25e6);
+        eprintln!("pull: dissipated {sum} J/m² against G_f^I = {gf}");
+        assert!(sum <= gf * (1.0 + 1e-6), "{sum}");
+        assert!(gf - sum <= ft * max_dup + 1e-5 * gf, "{sum} {max_dup}");
     }
 
     /// Shear under a constant compression σ = −0.3 MPa: τ = c exp(−c u_p/G_f^II) − σ tan φ,

@@ -18,6 +18,19 @@
 //! path is followed through limit points of the load and through snap-backs, where
 //! displacement control has no solution in the neighbourhood of the last converged state.
 //!
+//! With `path = "dissipation"` the cylinder holds until the contacts start to spend
+//! energy; then λ is fixed by the energy the increment spends against the softening and
+//! hardening strengths of the contacts (docs/theory.md, "Dissipation-based arc length";
+//! Gutiérrez 2004, Verhoosel, Remmers and Gutiérrez 2009):
+//!
+//! ```text
+//! Σ_contacts A (G Δξ + σ̄(κ₃) Δκ₃) = Δτ                           (theory.md, Eq. A2)
+//! ```
+//!
+//! (J; [`crate::material::Softening::softening_work`], METHOD.md §3 for the law), a local
+//! constraint: only the contacts where a crack grows or a toe crushes take part, where the
+//! cylinder measures all unknowns and lets a local snap-back or an elastic mode pass.
+//!
 //! The block's rotation is held as under displacement control, and so is any translation
 //! whose `push_displacement` component is 0 (its increment pinned to zero, its force a
 //! reaction); a vertical motion left free (`push_displacement` a number) stays free.
@@ -174,19 +187,20 @@ enum StepFailure {
 }
 
 impl Driver<'_> {
-    /// The energy (J) dissipated by all contacts from the committed state to `trial`
-    /// (Eq. A2, [`crate::material::softening::dissipation`]), summed in contact order
-    /// whatever the number of threads.
+    /// The energy (J) the contacts spend from the committed state to `trial` against the
+    /// strengths that soften or harden with their history (Eq. A2,
+    /// [`crate::material::Softening::softening_work`]; nothing for the laws without
+    /// history), summed in contact order whatever the number of threads.
     fn dissipated(&self, trial: &Trial) -> f64 {
         (0..self.area.len())
-            .map(|k| {
-                let law = self.law.get(k);
-                crate::material::softening::dissipation(
-                    law.springs(self.area[k]),
-                    self.committed.force[k],
-                    trial.force[k],
-                    trial.rel[k],
-                )
+            .map(|k| match self.law.get(k) {
+                crate::material::JointLaw::Softening(m) => m.softening_work(
+                    self.area[k],
+                    self.committed.history.get(k).copied().unwrap_or([0.0; 2]),
+                    trial.history.get(k).copied().unwrap_or([0.0; 2]),
+                    trial.state[k],
+                ),
+                crate::material::JointLaw::MohrCoulomb(_) => 0.0,
             })
             .sum()
     }
@@ -671,6 +685,19 @@ pub(super) fn run(
                 }
             }
             Err(why) => {
+                if cuts >= d.settings.max_cuts && tau.is_some() {
+                    // no increment that spends Δτ near the last state (the joints slide
+                    // on friction alone, or the iterations fail): back to the cylinder,
+                    // at the length of the last converged increment, until an increment
+                    // dissipates again
+                    tau = None;
+                    cuts = 0;
+                    if let Some((q, _, _)) = &previous {
+                        let free = (d.cur.n_dofs - d.pins.len()) as f64;
+                        dl = (dot(q, q) / free).sqrt().min(dl_max);
+                    }
+                    continue;
+                }
                 if cuts >= d.settings.max_cuts {
                     let why = match why {
                         StepFailure::NoConvergence(r) => format!("the out-of-balance force stays at {r:.2e} of the load along the arc"),

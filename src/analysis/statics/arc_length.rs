@@ -205,6 +205,29 @@ impl Driver<'_> {
             .sum()
     }
 
+    /// `DFEM_TRACE`: the contact that spends the most energy in the increment to `trial`
+    /// (Eq. A2), with its increments of ξ and κ₃ and its node (m).
+    fn trace_spending(&self, trial: &Trial) {
+        let mut worst = (0, 0.0, [0.0; 2]);
+        for k in 0..self.area.len() {
+            if let crate::material::JointLaw::Softening(m) = self.law.get(k) {
+                let h0 = self.committed.history.get(k).copied().unwrap_or([0.0; 2]);
+                let h1 = trial.history.get(k).copied().unwrap_or([0.0; 2]);
+                let w = m.softening_work(self.area[k], h0, h1, trial.state[k]);
+                if w > worst.1 {
+                    worst = (k, w, [h1[0] - h0[0], h1[1] - h0[1]]);
+                }
+            }
+        }
+        let (k, w, dh) = worst;
+        if let Some(c) = self.cur.contacts.get(k) {
+            eprintln!(
+                "arc spending: contact {k} at {:?} spends {w:.3e} J (Δξ {:.2e}, Δκ₃ {:.2e} m, {:?}), force {:?}",
+                self.cur.nodes[c.node_m as usize], dh[0], dh[1], trial.state[k], trial.force[k]
+            );
+        }
+    }
+
     /// The load-factor correction δλ (N) along the line `w` + δλ `dp` on which the
     /// contacts dissipate Δτ = `tau` (J) in the increment: secant iterations from δλ = 0
     /// and a trial step that moves the increment by 10⁻³ of its length. `None` when the
@@ -639,6 +662,9 @@ pub(super) fn run(
                     .zip(&s.p)
                     .map(|(b, q)| b + (lam + dlam) * q)
                     .collect();
+                if super::super::tracing() {
+                    d.trace_spending(&trial);
+                }
                 let mut reaction = d.reaction(push.block, &trial.f_int, &fe);
                 let dq = trial.dq.clone();
                 d.commit(trial, &dq, &vec![[0.0; 2]; d.cur.blocks.len()]);

@@ -41,6 +41,16 @@
 //!   Lourenço 1994/1996, Lourenço and Rots 1997 or Petracca et al. 2017 beyond their
 //!   opening pages), so the 57 kN is shown, not asserted: it and the 50 kN above differ
 //!   by 14 %, more than the 10 % the issue asks for, and which is right is open.
+//! * a second search on 25 November 2026 (23:05–23:20 UTC; the stored pages, documentation,
+//!   code and issues) with other queries — "Raijmakers Vermeltfoort 1992 shear wall J4D",
+//!   "Lourenço micro-model shear wall pre-compression 0.30 1.21 2.12 N/mm2 collapse load",
+//!   "TU Eindhoven masonry shear wall 990 x 1000 mm", "multisurface interface model …
+//!   Lourenço Rots", DEM papers that reproduce the walls (Bui, Limam and Sarhosis 2019;
+//!   Pulatsu et al., 3DEC), and exact strings "Vermeltfoort", "Raijmakers", "shear wall
+//!   J4D" — found again only the repository above and the abstracts or opening pages of
+//!   papers (Lourenço and Rots 1997's abstract: the model "is capable of predicting the
+//!   experimental collapse load and behaviour accurately", no number). No experimental
+//!   number is verified.
 //!
 //! The fast test runs J4D with bricks meshed at 0.052 m (half a brick's height) under
 //! displacement control to 1.5 mm: the peak (first maximum) within 10 % of 50 kN, and

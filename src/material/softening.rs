@@ -298,6 +298,45 @@ impl ContactLaw for Softening {
     }
 }
 
+impl Softening {
+    /// The energy (J) a contact of area `area` (m²) spends in an increment against the
+    /// strengths that soften or harden with its history, from the committed history
+    /// `before` to `after` (ξ, κ₃), the contact ending in `state`:
+    ///
+    /// ```text
+    /// ΔW = A (G Δξ + σ̄(κ₃) Δκ₃)                                  (theory.md, Eq. A2)
+    /// ```
+    ///
+    /// with G = G_f^I where the tension surface is active (the contact opens) and G_f^II
+    /// where the shear surface alone is (it slips). Along a pure mode this is exact:
+    /// s′ = s exp(−fₜ Δλ₁/G_f^I) gives ∫ s fₜ dλ₁ = G_f^I (s − s′) = G_f^I Δξ, and likewise
+    /// in shear with c and G_f^II; in mixed mode the work lies between G_f^I Δξ and
+    /// G_f^II Δξ. The cap's work is its yield value at the end of the increment times the
+    /// plastic length (backward Euler, exact under uniaxial compression). Friction is left
+    /// out: it dissipates in whichever direction a joint slips, so an unloading that slides
+    /// the joints back would dissipate as much as a crack that grows, while ξ and κ₃ only
+    /// grow (METHOD.md §3). The constraint of the dissipation-based arc length (Gutiérrez
+    /// 2004, Verhoosel et al. 2009) in src/analysis/statics/arc_length.rs.
+    pub fn softening_work(
+        &self,
+        area: f64,
+        before: History,
+        after: History,
+        state: ContactState,
+    ) -> f64 {
+        let g = if state == ContactState::Open {
+            self.fracture_energy_i
+        } else {
+            self.fracture_energy_ii
+        };
+        let dxi = (after[0] - before[0]).max(0.0);
+        let cap = self.cap.map_or(0.0, |c| {
+            c.yield_value(after[1]) * (after[1] - before[1]).max(0.0)
+        });
+        area * (g * dxi + cap)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -497,6 +536,55 @@ mod tests {
         // exp(−1000/72) ≈ 1e-6 is left
         assert!((work - 18.0).abs() < 1e-4 * 18.0, "work {work}");
         assert!((xi - 1.0).abs() < 1e-4, "xi {xi}");
+    }
+
+    /// [`Softening::softening_work`] over a pull in tension of a unit contact in steps of
+    /// 1 µm to 1 mm: zero on the elastic branch, positive at every step past the peak, and
+    /// summing to G_f^I (1 − s) at the remaining fraction s exactly (the exponential's
+    /// integral, to round-off); then a shear that slides the spent joint back and forth
+    /// under compression spends nothing more, though friction dissipates.
+    #[test]
+    fn softening_work_of_a_pull_is_gf1_and_friction_is_left_out() {
+        let m = eindhoven();
+        let (mut f, mut h) = ([0.0, 0.0], [0.0; 2]);
+        let mut sum = 0.0;
+        let du = 1e-6;
+        for _ in 0..1000 {
+            let (g, st, h2) = m.update_history(1.0, f, h, [du, 0.0]);
+            let w = m.softening_work(1.0, h, h2, st);
+            if st == ContactState::Stick {
+                assert_eq!(w, 0.0, "elastic step");
+            } else {
+                assert!(w > 0.0, "plastic step spends {w}");
+            }
+            sum += w;
+            (f, h) = (g, h2);
+        }
+        let gf = 18.0;
+        eprintln!("pull: spent {sum} J/m² of G_f^I = {gf}, ξ = {}", h[0]);
+        assert!((sum - gf * h[0]).abs() < 1e-12 * gf, "{sum} {}", h[0]);
+        assert!(h[0] > 1.0 - 1e-5, "ξ = {}", h[0]);
+        // close the crack into compression, then slide it back and forth
+        // (the crack's plastic opening stays: σ = −1 MPa after an elastic closure)
+        let (g, _, h2) = m.update_history(1.0, f, h, [-(f[0] + 1e6) / 82e9, 0.0]);
+        (f, h) = (g, h2);
+        assert!(f[0] < 0.0, "{f:?}");
+        // at most the remaining cohesion's G_f^II (1 − ξ) can be spent, against about
+        // 0.75 MPa × 3 mm of friction work
+        let left = 125.0 * (1.0 - h[0]);
+        let (mut spent, mut friction) = (0.0, 0.0);
+        for k in 0..40 {
+            let ds = if (k / 10) % 2 == 0 { 1e-4 } else { -1e-4 };
+            let (g, st, h2) = m.update_history(1.0, f, h, [0.0, ds]);
+            spent += m.softening_work(1.0, h, h2, st);
+            if st == ContactState::Slip {
+                friction += g[1].abs() * (ds - (g[1] - f[1]) / 36e9).abs();
+            }
+            (f, h) = (g, h2);
+        }
+        eprintln!("slides: spent {spent} J/m² (≤ {left}), friction {friction} J/m²");
+        assert!(spent <= left * (1.0 + 1e-9) + 1e-15, "{spent} {left}");
+        assert!(friction > 1e3, "{friction}");
     }
 
     /// Shear under a constant compression σ = −0.3 MPa: τ = c exp(−c u_p/G_f^II) − σ tan φ,

@@ -18,6 +18,19 @@
 //! path is followed through limit points of the load and through snap-backs, where
 //! displacement control has no solution in the neighbourhood of the last converged state.
 //!
+//! With `path = "dissipation"` the cylinder holds until the contacts start to spend
+//! energy; then λ is fixed by the energy the increment spends against the softening and
+//! hardening strengths of the contacts (docs/theory.md, "Dissipation-based arc length";
+//! Gutiérrez 2004, Verhoosel, Remmers and Gutiérrez 2009):
+//!
+//! ```text
+//! Σ_contacts A (G Δξ + σ̄(κ₃) Δκ₃) = Δτ                           (theory.md, Eq. A2)
+//! ```
+//!
+//! (J; [`crate::material::Softening::softening_work`], METHOD.md §3 for the law), a local
+//! constraint: only the contacts where a crack grows or a toe crushes take part, where the
+//! cylinder measures all unknowns and lets a local snap-back or an elastic mode pass.
+//!
 //! The block's rotation is held as under displacement control, and so is any translation
 //! whose `push_displacement` component is 0 (its increment pinned to zero, its force a
 //! reaction); a vertical motion left free (`push_displacement` a number) stays free.
@@ -41,6 +54,9 @@ pub struct ArcLength {
     /// whose elastic predictor moves the block by `push_displacement / load_steps` at the
     /// first increment.
     pub length: Option<f64>,
+    /// `path = "dissipation"`: the cylinder of Eq. A1 until the contacts start to
+    /// dissipate, then the energy dissipated per increment (Eq. A2).
+    pub dissipation: bool,
 }
 
 impl ArcLength {
@@ -51,19 +67,20 @@ impl ArcLength {
         let path = match x.get("path") {
             None => None,
             Some(v) => Some(v.as_str().ok_or_else(|| {
-                Error::new("path is not a string")
-                    .place(place("path"))
-                    .fix("give path = \"displacement\" (the default) or \"arc_length\"")
+                Error::new("path is not a string").place(place("path")).fix(
+                    "give path = \"displacement\" (the default), \"arc_length\" or \"dissipation\"",
+                )
             })?),
         };
-        let arc = match path {
-            None | Some("displacement") => false,
-            Some("arc_length") => true,
-            Some(other) => {
-                return Err(Error::new(format!("unknown path \"{other}\""))
-                    .place(place("path"))
-                    .fix("give path = \"displacement\" (the default) or \"arc_length\""))
-            }
+        let (arc, dissipation) = match path {
+            None | Some("displacement") => (false, false),
+            Some("arc_length") => (true, false),
+            Some("dissipation") => (true, true),
+            Some(other) => return Err(Error::new(format!("unknown path \"{other}\""))
+                .place(place("path"))
+                .fix(
+                    "give path = \"displacement\" (the default), \"arc_length\" or \"dissipation\"",
+                )),
         };
         if !arc {
             if x.contains_key("arc_length") {
@@ -90,7 +107,10 @@ impl ArcLength {
                 1e3,
             )?),
         };
-        Ok(Some(ArcLength { length }))
+        Ok(Some(ArcLength {
+            length,
+            dissipation,
+        }))
     }
 }
 
@@ -132,6 +152,32 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
+/// The constraint that fixes the load factor of an increment.
+#[derive(Debug, Clone, Copy)]
+enum Constraint {
+    /// ‖Δu‖² = n Δl² (Eq. A1): the value n Δl² (m²).
+    Cylinder(f64),
+    /// The energy the contacts dissipate in the increment, Σ ΔD = Δτ (Eq. A2): Δτ (J).
+    Dissipation(f64),
+}
+
+/// A dissipation-controlled increment is accepted at its predictor only when the
+/// predictor is in equilibrium and dissipates at least this fraction of Δτ: an increment
+/// that dissipates nothing would let the path turn back along an elastic mode (on the
+/// Eindhoven wall the cylinder accepted 4,000 such increments without moving the beam).
+const PREDICTOR_DISSIPATION: f64 = 0.5;
+
+/// The switch from the cylinder to the dissipation constraint: after the first converged
+/// increment whose dissipated energy exceeds this fraction of the work of the push in it
+/// (or any increment past a peak, where the push's work is not positive and the
+/// contacts still dissipate). Verhoosel et al. (2009) switch at a threshold of the
+/// dissipation itself; a fraction of the work does not depend on the units or the size
+/// of the model.
+const SWITCH_FRACTION: f64 = 0.1;
+
+/// The secant iterations on δλ of the dissipation constraint in one correction.
+const SECANT_STEPS: usize = 4;
+
 /// Why an arc-length increment failed.
 enum StepFailure {
     /// Not converged: the relative out-of-balance force left.
@@ -141,6 +187,79 @@ enum StepFailure {
 }
 
 impl Driver<'_> {
+    /// The energy (J) the contacts spend from the committed state to `trial` against the
+    /// strengths that soften or harden with their history (Eq. A2,
+    /// [`crate::material::Softening::softening_work`]; nothing for the laws without
+    /// history), summed in contact order whatever the number of threads.
+    fn dissipated(&self, trial: &Trial) -> f64 {
+        (0..self.area.len())
+            .map(|k| match self.law.get(k) {
+                crate::material::JointLaw::Softening(m) => m.softening_work(
+                    self.area[k],
+                    self.committed.history.get(k).copied().unwrap_or([0.0; 2]),
+                    trial.history.get(k).copied().unwrap_or([0.0; 2]),
+                    trial.state[k],
+                ),
+                crate::material::JointLaw::MohrCoulomb(_) => 0.0,
+            })
+            .sum()
+    }
+
+    /// `DFEM_TRACE`: the contact that spends the most energy in the increment to `trial`
+    /// (Eq. A2), with its increments of ξ and κ₃ and its node (m).
+    fn trace_spending(&self, trial: &Trial) {
+        let mut worst = (0, 0.0, [0.0; 2]);
+        for k in 0..self.area.len() {
+            if let crate::material::JointLaw::Softening(m) = self.law.get(k) {
+                let h0 = self.committed.history.get(k).copied().unwrap_or([0.0; 2]);
+                let h1 = trial.history.get(k).copied().unwrap_or([0.0; 2]);
+                let w = m.softening_work(self.area[k], h0, h1, trial.state[k]);
+                if w > worst.1 {
+                    worst = (k, w, [h1[0] - h0[0], h1[1] - h0[1]]);
+                }
+            }
+        }
+        let (k, w, dh) = worst;
+        if let Some(c) = self.cur.contacts.get(k) {
+            eprintln!(
+                "arc spending: contact {k} at {:?} spends {w:.3e} J (Δξ {:.2e}, Δκ₃ {:.2e} m, {:?}), force {:?}",
+                self.cur.nodes[c.node_m as usize], dh[0], dh[1], trial.state[k], trial.force[k]
+            );
+        }
+    }
+
+    /// The load-factor correction δλ (N) along the line `w` + δλ `dp` on which the
+    /// contacts dissipate Δτ = `tau` (J) in the increment: secant iterations from δλ = 0
+    /// and a trial step that moves the increment by 10⁻³ of its length. `None` when the
+    /// dissipation does not change along the line.
+    fn dissipation_root(&self, w: &[f64], dp: &[f64], tau: f64) -> Option<f64> {
+        let zero = vec![[0.0; 2]; self.cur.blocks.len()];
+        let g = |x: f64| {
+            let cand: Vec<f64> = w.iter().zip(dp).map(|(a, b)| a + x * b).collect();
+            self.dissipated(&self.trial(&cand, &zero)) - tau
+        };
+        let scale = (dot(w, w) / dot(dp, dp).max(1e-300)).sqrt();
+        let (mut x0, mut g0) = (0.0, g(0.0));
+        let mut x1 = 1e-3 * scale.max(1e-300);
+        let mut g1 = g(x1);
+        for _ in 0..SECANT_STEPS {
+            if (g1 - g0).abs() <= 1e-14 * tau.abs().max(g0.abs()) {
+                break;
+            }
+            let x2 = x1 - g1 * (x1 - x0) / (g1 - g0);
+            if !x2.is_finite() {
+                return None;
+            }
+            (x0, g0) = (x1, g1);
+            x1 = x2;
+            g1 = g(x1);
+            if g1.abs() <= 1e-3 * tau {
+                return Some(x1);
+            }
+        }
+        (g1.abs() < g0.abs().min(tau)).then_some(x1)
+    }
+
     /// The tangent of every contact's law at the trial (N/m, in the contact's frame:
     /// rows (Fₙ, Fₛ), columns (δₙ, δₛ)), by forward differences of the law's return
     /// from the committed state: ∂F/∂δ ≈ (F(Δδ + ε eⱼ) − F(Δδ)) / ε, ε = 10⁻⁷ of the
@@ -248,8 +367,9 @@ impl Driver<'_> {
 
     /// One correction on the arc from the iterate `dq` at the load factor `lam` (the
     /// out-of-balance force `r`, its norm `rn`): the solves with the tangent or secant
-    /// matrix, δλ from the constraint ‖dq + δu_r + δλ δu_P‖² = `len2` (the root that
-    /// turns the increment least), and backtracking (the best of the steps 1, ½, ¼, ⅛
+    /// matrix, δλ from the constraint — on the cylinder ‖dq + δu_r + δλ δu_P‖² = n Δl²
+    /// the root that turns the increment least, on the dissipation the root of Eq. A2
+    /// along the line ([`Driver::dissipation_root`]) — and backtracking (the best of the steps 1, ½, ¼, ⅛
     /// where the full one raises the out-of-balance force). Returns (the norm of the
     /// out-of-balance force after it, the new dq, its δλ), or `None` when the matrix
     /// cannot be factorized or the line meets no point of the cylinder.
@@ -262,14 +382,23 @@ impl Driver<'_> {
         (p, base): (&[f64], &[f64]),
         dq: &[f64],
         lam: f64,
-        len2: f64,
+        constraint: Constraint,
         tangent: bool,
     ) -> Result<Option<(f64, Vec<f64>, f64)>> {
         let Some((dr, dp)) = self.solve_pair(trial, r, p, tangent)? else {
             return Ok(None);
         };
-        // ‖dq + dr + δλ dp‖² = n Δl²: a δλ² + b δλ + c = 0
         let w: Vec<f64> = dq.iter().zip(&dr).map(|(a, b)| a + b).collect();
+        let len2 = match constraint {
+            Constraint::Cylinder(len2) => len2,
+            Constraint::Dissipation(tau) => {
+                let Some(dl) = self.dissipation_root(&w, &dp, tau) else {
+                    return Ok(None);
+                };
+                return Ok(Some(self.backtrack(&w, &dp, dl, rn, (p, base), dq, lam)));
+            }
+        };
+        // ‖dq + dr + δλ dp‖² = n Δl²: a δλ² + b δλ + c = 0
         let a = dot(&dp, &dp);
         let b = 2.0 * dot(&dp, &w);
         let c = dot(&w, &w) - len2;
@@ -291,14 +420,31 @@ impl Driver<'_> {
         } else {
             roots[1]
         };
+        Ok(Some(self.backtrack(&w, &dp, dl, rn, (p, base), dq, lam)))
+    }
+
+    /// The best of the steps α = 1, ½, ¼, ⅛ from `dq` towards `w` + δλ `dp` at the load
+    /// factor `lam` + α δλ (the first that does not raise the out-of-balance force
+    /// above `rn`): (its out-of-balance force, the iterate, α δλ).
+    #[allow(clippy::too_many_arguments)]
+    fn backtrack(
+        &self,
+        w: &[f64],
+        dp: &[f64],
+        dl: f64,
+        rn: f64,
+        (p, base): (&[f64], &[f64]),
+        dq: &[f64],
+        lam: f64,
+    ) -> (f64, Vec<f64>, f64) {
         let zero = vec![[0.0; 2]; self.cur.blocks.len()];
         let mut best: Option<(f64, Vec<f64>, f64)> = None;
         let mut alpha = 1.0;
         for _ in 0..4 {
             let cand: Vec<f64> = dq
                 .iter()
-                .zip(&w)
-                .zip(&dp)
+                .zip(w)
+                .zip(dp)
                 .map(|((q, wi), pi)| q + alpha * (wi + dl * pi - q))
                 .collect();
             let fe: Vec<f64> = base
@@ -316,39 +462,45 @@ impl Driver<'_> {
             }
             alpha *= 0.5;
         }
-        Ok(best)
+        best.expect("four steps tried")
     }
 
-    /// One arc-length increment of length `dl` (m, root-mean-square) from the committed
-    /// state at the load factor `lam0`: the converged trial and its Δλ, or why not.
+    /// One arc-length increment under `constraint` from the committed state at the load
+    /// factor `lam0`, after the increment `previous` (unknowns, Δλ, dissipated energy in
+    /// J): the converged trial, its Δλ and the energy it dissipates, or why not.
     fn arc_step(
         &mut self,
         base: &[f64],
         p: &[f64],
         lam0: f64,
-        dl: f64,
-        previous: Option<(&[f64], f64)>,
-    ) -> Result<std::result::Result<(Trial, f64), StepFailure>> {
+        constraint: Constraint,
+        previous: Option<(&[f64], f64, f64)>,
+    ) -> Result<std::result::Result<(Trial, f64, f64), StepFailure>> {
         let n = self.cur.n_dofs;
         let zero = vec![[0.0; 2]; self.cur.blocks.len()];
-        let free = n - self.pins.len();
-        let len2 = dl * dl * free as f64;
         let f_ext =
             |lam: f64| -> Vec<f64> { base.iter().zip(p).map(|(b, q)| b + lam * q).collect() };
-        // predictor: the last increment scaled to the arc length (a secant predictor,
-        // which turns with the path at limit points and snap-backs), or at the first
-        // increment the secant matrix's response to P̂
+        // predictor: the last increment scaled to the arc length or to the energy to
+        // dissipate (a secant predictor, which turns with the path at limit points and
+        // snap-backs; the dissipation taken as proportional to the increment), or at the
+        // first increment the secant matrix's response to P̂
         let mut dq = vec![0.0; n];
         let mut dlam;
-        match previous {
-            Some((prev, prev_dlam)) => {
-                let f = (len2 / dot(prev, prev).max(1e-300)).sqrt();
+        match (previous, constraint) {
+            (Some((prev, prev_dlam, prev_d)), _) => {
+                let f = match constraint {
+                    Constraint::Cylinder(len2) => (len2 / dot(prev, prev).max(1e-300)).sqrt(),
+                    Constraint::Dissipation(tau) => (tau / prev_d.max(1e-300)).clamp(0.25, 2.0),
+                };
                 for (q, a) in dq.iter_mut().zip(prev) {
                     *q = f * a;
                 }
                 dlam = f * prev_dlam;
             }
-            None => {
+            (None, Constraint::Dissipation(_)) => {
+                unreachable!("the dissipation constraint follows a converged increment")
+            }
+            (None, Constraint::Cylinder(len2)) => {
                 let trial = self.trial(&dq, &zero);
                 let r = self.out_of_balance(&f_ext(lam0), &trial.f_int);
                 let Some((ur, up)) = self.solve_pair(&trial, &r, p, true)? else {
@@ -391,10 +543,19 @@ impl Driver<'_> {
             // the iterate, so a small residual is equilibrium whatever states the last
             // iterate had (at the kink of a law the two states give the same force, and
             // the iterates step from one side to the other by 10⁻¹¹ m)
-            if it > 0 && rn <= self.settings.tolerance * scale {
-                self.report.iterations = it;
-                self.report.residual = residual;
-                return Ok(Ok((trial, dlam)));
+            if rn <= self.settings.tolerance * scale {
+                let dissipated = self.dissipated(&trial);
+                let accept = match constraint {
+                    Constraint::Cylinder(_) => it > 0,
+                    Constraint::Dissipation(tau) => {
+                        it > 0 || dissipated >= PREDICTOR_DISSIPATION * tau
+                    }
+                };
+                if accept {
+                    self.report.iterations = it;
+                    self.report.residual = residual;
+                    return Ok(Ok((trial, dlam, dissipated)));
+                }
             }
             if rn < STALL_PROGRESS * best_rn {
                 best_rn = rn;
@@ -407,10 +568,10 @@ impl Driver<'_> {
             // step does not lower the out-of-balance force (a piece whose contacts are
             // all softening has a tangent near zero, and its step throws the piece far)
             let lam = lam0 + dlam;
-            let mut pick = self.corrector(&trial, &r, rn, (p, base), &dq, lam, len2, true)?;
+            let mut pick = self.corrector(&trial, &r, rn, (p, base), &dq, lam, constraint, true)?;
             if pick.as_ref().is_none_or(|t| t.0 > rn) {
                 if let Some(sec) =
-                    self.corrector(&trial, &r, rn, (p, base), &dq, lam, len2, false)?
+                    self.corrector(&trial, &r, rn, (p, base), &dq, lam, constraint, false)?
                 {
                     if sec.0 < rn || pick.is_none() {
                         pick = Some(sec);
@@ -478,22 +639,34 @@ pub(super) fn run(
         }
     };
     let mut dl = dl_max;
+    // with path = "dissipation", once switched: Δτ (J) and its largest value, the energy
+    // dissipated by the increment that switched it on (grown back to it after quick
+    // increments as Δl is)
+    let mut tau: Option<(f64, f64)> = None;
     let mut lam = 0.0;
-    // the last converged increment (unknowns, Δλ)
-    let mut previous: Option<(Vec<f64>, f64)> = None;
+    // the last converged increment (unknowns, Δλ, dissipated energy)
+    let mut previous: Option<(Vec<f64>, f64, f64)> = None;
     let mut cuts = 0;
     // a path that never reaches its end (it turns back for good) stops after this many
     let limit = 50 * steps.max(1);
     let mut done = 0;
     while along(d) < s.target * (1.0 - 1e-9) && done < limit {
-        let prev = previous.as_ref().map(|(q, l)| (q.as_slice(), *l));
-        match d.arc_step(base, &s.p, lam, dl, prev)? {
-            Ok((trial, dlam)) => {
+        let prev = previous.as_ref().map(|(q, l, e)| (q.as_slice(), *l, *e));
+        let free = (d.cur.n_dofs - d.pins.len()) as f64;
+        let constraint = match tau {
+            Some((t, _)) => Constraint::Dissipation(t),
+            None => Constraint::Cylinder(dl * dl * free),
+        };
+        match d.arc_step(base, &s.p, lam, constraint, prev)? {
+            Ok((trial, dlam, dissipated)) => {
                 let fe: Vec<f64> = base
                     .iter()
                     .zip(&s.p)
                     .map(|(b, q)| b + (lam + dlam) * q)
                     .collect();
+                if super::super::tracing() {
+                    d.trace_spending(&trial);
+                }
                 let mut reaction = d.reaction(push.block, &trial.f_int, &fe);
                 let dq = trial.dq.clone();
                 d.commit(trial, &dq, &vec![[0.0; 2]; d.cur.blocks.len()]);
@@ -504,7 +677,22 @@ pub(super) fn run(
                 d.converged(fraction);
                 let pt = d.push_point(push.block, fraction, Some(reaction));
                 d.push_curve.push(pt);
-                previous = Some((dq, dlam));
+                // the work of the push in the increment (J), by the trapezoidal rule
+                let work = (lam - 0.5 * dlam) * dot(&s.p, &dq);
+                if arc.dissipation
+                    && tau.is_none()
+                    && dissipated > 0.0
+                    && (dissipated > SWITCH_FRACTION * work || work <= 0.0)
+                {
+                    tau = Some((dissipated, dissipated));
+                }
+                if super::super::tracing() {
+                    eprintln!(
+                        "arc increment: load {lam:.6e} at {:.6e}, dissipated {dissipated:.3e} J, push work {work:.3e} J, constraint {constraint:?}",
+                        along(d)
+                    );
+                }
+                previous = Some((dq, dlam, dissipated));
                 if lam < 0.0 {
                     d.pins.clear();
                     return Ok((
@@ -519,9 +707,25 @@ pub(super) fn run(
                 cuts = 0;
                 if d.report.iterations <= d.settings.max_iterations / 10 {
                     dl = (2.0 * dl).min(dl_max);
+                    if let Some((t, t_max)) = &mut tau {
+                        *t = (2.0 * *t).min(*t_max);
+                    }
                 }
             }
             Err(why) => {
+                if cuts >= d.settings.max_cuts && tau.is_some() {
+                    // no increment that spends Δτ near the last state (the joints slide
+                    // on friction alone, or the iterations fail): back to the cylinder,
+                    // at the length of the last converged increment, until an increment
+                    // dissipates again
+                    tau = None;
+                    cuts = 0;
+                    if let Some((q, _, _)) = &previous {
+                        let free = (d.cur.n_dofs - d.pins.len()) as f64;
+                        dl = (dot(q, q) / free).sqrt().min(dl_max);
+                    }
+                    continue;
+                }
                 if cuts >= d.settings.max_cuts {
                     let why = match why {
                         StepFailure::NoConvergence(r) => format!("the out-of-balance force stays at {r:.2e} of the load along the arc"),
@@ -532,6 +736,9 @@ pub(super) fn run(
                 }
                 cuts += 1;
                 dl *= 0.5;
+                if let Some((t, _)) = &mut tau {
+                    *t *= 0.5;
+                }
             }
         }
     }

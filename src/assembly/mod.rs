@@ -238,15 +238,16 @@ impl System {
         }
         if cache.values.is_none() {
             let mut b = CsrMatrix::zeros(self.plan.pattern().clone());
-            let packed = |e: usize, ke: &mut [f64]| {
-                self.element(mesh, &self.dt, g, local, Form::Packed, e, ke)
-            };
             self.plan.assemble_groups_of(
                 Form::Packed,
                 0..CONTACTS,
                 None,
                 self.active(),
-                packed,
+                // inlined into the plan's loop: a triangle's values stay in registers
+                #[inline(always)]
+                |e: usize, ke: &mut [f64]| {
+                    self.element(mesh, &self.dt, g, local, Form::Packed, e, ke)
+                },
                 &mut b,
             );
             cache.values = Some(b);
@@ -324,10 +325,17 @@ impl System {
         out: &mut CsrMatrix,
     ) {
         let form = self.form(local);
-        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, d, g, local, form, e, ke);
         let groups = 0..self.plan.n_groups();
-        self.plan
-            .assemble_groups_of(form, groups, None, self.active(), kernel, out);
+        self.plan.assemble_groups_of(
+            form,
+            groups,
+            None,
+            self.active(),
+            // inlined into the plan's loop: a triangle's values stay in registers
+            #[inline(always)]
+            |e: usize, ke: &mut [f64]| self.element(mesh, d, g, local, form, e, ke),
+            out,
+        );
     }
 
     /// The update path: `out` holds [`Self::stiffness_into`]`(mesh, prev, out)` (and has
@@ -402,8 +410,7 @@ impl System {
     /// triangle with the material matrices `d` (per material), a contact with its
     /// gradients in `g` ([`Self::contact_gradients`]) and its local matrix. A symmetric
     /// element matrix is computed packed in either form, so that an element adds the same
-    /// values whatever the form. Inlined into the plan's loop, so that a triangle's 21
-    /// values stay in registers between its kernel and its scatter.
+    /// values whatever the form.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn element(
@@ -487,17 +494,17 @@ pub fn cst_stiffness(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
 /// ([`cst_b`]), so K_ij = 1/(4A) [[bᵢ,0,cᵢ],[0,cᵢ,bᵢ]] (tDₑ) [[bⱼ,0],[0,cⱼ],[cⱼ,bⱼ]]: 14
 /// products per node for (tDₑ)Bⱼ/(4A), then 2 per entry, 84 in all (the dense triple
 /// product of [`cst_b`]'s matrices takes 324), and the lower triangle is not computed.
-/// Inlined (the plan's triangle loop keeps the values in registers).
 #[inline(always)]
 pub fn cst_stiffness_packed(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
     let ke: &mut [f64; 21] = (&mut ke[..21]).try_into().expect("21 values");
     let b = [p[1][1] - p[2][1], p[2][1] - p[0][1], p[0][1] - p[1][1]];
     let c = [p[2][0] - p[1][0], p[0][0] - p[2][0], p[1][0] - p[0][0]];
-    // 1/(4A), A the signed area
+    // 1/(4A), A the signed area: applied last, so that the division's latency overlaps
+    // the products (nothing else waits for it)
     let f = 0.5 / (b[0] * c[1] - b[1] * c[0]);
-    // (tDₑ) Bⱼ / (4A): its x column and its y column, per node j
+    // (tDₑ) Bⱼ 2A: its x column and its y column, per node j
     let db: [[[f64; 3]; 2]; 3] = std::array::from_fn(|j| {
-        let (bj, cj) = (f * b[j], f * c[j]);
+        let (bj, cj) = (b[j], c[j]);
         [
             std::array::from_fn(|r| dt[r][0] * bj + dt[r][2] * cj),
             std::array::from_fn(|r| dt[r][1] * cj + dt[r][2] * bj),
@@ -506,9 +513,9 @@ pub fn cst_stiffness_packed(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
     let mut t = 0;
     for i in 0..3 {
         let (bi, ci) = (b[i], c[i]);
-        // row x of node i: [bᵢ, 0, cᵢ] · column; row y: [0, cᵢ, bᵢ] · column
-        let rx = |d: &[f64; 3]| bi * d[0] + ci * d[2];
-        let ry = |d: &[f64; 3]| ci * d[1] + bi * d[2];
+        // row x of node i: [bᵢ, 0, cᵢ] · column; row y: [0, cᵢ, bᵢ] · column; times 1/(4A)
+        let rx = |d: &[f64; 3]| f * (bi * d[0] + ci * d[2]);
+        let ry = |d: &[f64; 3]| f * (ci * d[1] + bi * d[2]);
         for d in &db[i..] {
             ke[t] = rx(&d[0]);
             ke[t + 1] = rx(&d[1]);

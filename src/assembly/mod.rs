@@ -691,6 +691,39 @@ mod tests {
         assert!(same_bits(&out.values, &k.values));
     }
 
+    /// The contacts' gradients kept with the geometry follow it: with the node positions
+    /// unchanged but every contact normal turned by 0.1 rad, the kept path (triangles'
+    /// part and gradients kept from the calls before) gives the matrix of a full
+    /// assembly on the turned normals, to the bit, and not the one of the old normals.
+    #[test]
+    fn kept_gradients_follow_the_normals() {
+        let text = crate::scene::examples::get("wall")
+            .unwrap()
+            .replace("joint = 0.0\n", "joint = 0.0\nmesh_size = 0.1\n");
+        let scene = crate::scene::parse_str(&text, None).unwrap();
+        let mesh = crate::mesh::build(&scene);
+        let sys = System::new(&scene, &mesh);
+        let springs = crate::material::ContactSprings { kn: 1e9, ks: 3e8 };
+        let local = vec![diagonal(springs); mesh.contacts.len()];
+        let zeros = || CsrMatrix::zeros(sys.plan.pattern().clone());
+        let mut before = zeros();
+        for _ in 0..2 {
+            sys.stiffness_into(&mesh, &local, &mut before);
+        }
+        let mut turned = mesh.clone();
+        let (sin, cos) = 0.1f64.sin_cos();
+        for c in &mut turned.contacts {
+            let n = c.normal;
+            c.normal = [cos * n[0] - sin * n[1], sin * n[0] + cos * n[1]];
+        }
+        let mut kept = zeros();
+        sys.stiffness_into(&turned, &local, &mut kept);
+        let mut full = zeros();
+        sys.stiffness_full_into(&turned, &local, &mut full);
+        assert!(same_bits(&kept.values, &full.values));
+        assert!(!same_bits(&kept.values, &before.values));
+    }
+
     #[test]
     fn cst_rigid_modes_have_no_energy() {
         let p = [[0.1, 0.2], [1.3, 0.1], [0.4, 0.9]];

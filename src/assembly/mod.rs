@@ -636,6 +636,16 @@ mod tests {
     use crate::scene::Plane;
     use dfem_kernels::same_bits;
 
+    /// The built-in wall example of deformable bricks, meshed at 0.1 m.
+    fn meshed_wall() -> (crate::scene::Scene, Mesh) {
+        let text = crate::scene::examples::get("wall")
+            .unwrap()
+            .replace("joint = 0.0\n", "joint = 0.0\nmesh_size = 0.1\n");
+        let scene = crate::scene::parse_str(&text, None).unwrap();
+        let mesh = crate::mesh::build(&scene);
+        (scene, mesh)
+    }
+
     /// The rows of a distributed assembly, simulated in one process: each of 3 ranks
     /// evaluates only the elements touching its own unknowns (block partition), and its
     /// rows, exchanged, rebuild the whole stiffness matrix bit for bit (the same additions
@@ -644,11 +654,7 @@ mod tests {
     /// spring stiffnesses per contact, so that a missing or doubled element shows.
     #[test]
     fn distributed_rows_rebuild_the_serial_matrix() {
-        let text = crate::scene::examples::get("wall")
-            .unwrap()
-            .replace("joint = 0.0\n", "joint = 0.0\nmesh_size = 0.1\n");
-        let scene = crate::scene::parse_str(&text, None).unwrap();
-        let mesh = crate::mesh::build(&scene);
+        let (scene, mesh) = meshed_wall();
         assert!(mesh.triangles.len() > 500 && mesh.contacts.len() > 100);
         let local: Vec<LocalStiffness> = (0..mesh.contacts.len())
             .map(|c| [[1e9 * (1.0 + c as f64 / 7.0), 0.0], [0.0, 3e8 + c as f64]])
@@ -697,11 +703,7 @@ mod tests {
     /// assembly on the turned normals, to the bit, and not the one of the old normals.
     #[test]
     fn kept_gradients_follow_the_normals() {
-        let text = crate::scene::examples::get("wall")
-            .unwrap()
-            .replace("joint = 0.0\n", "joint = 0.0\nmesh_size = 0.1\n");
-        let scene = crate::scene::parse_str(&text, None).unwrap();
-        let mesh = crate::mesh::build(&scene);
+        let (scene, mesh) = meshed_wall();
         let sys = System::new(&scene, &mesh);
         let springs = crate::material::ContactSprings { kn: 1e9, ks: 3e8 };
         let local = vec![diagonal(springs); mesh.contacts.len()];

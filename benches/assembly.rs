@@ -44,7 +44,7 @@
 //! to the bit on 1 and 2 threads and on every path of the present design, and within
 //! 1e-12 (relative to the largest entry of its row) of the old design's.
 
-use dfem::assembly::{contact_stiffness, cst_b, diagonal, LocalStiffness, System};
+use dfem::assembly::{contact_map, contact_stiffness, cst_b, diagonal, LocalStiffness, System};
 use dfem::material::ContactSprings;
 use dfem::mesh::Mesh;
 use dfem_kernels::csr::CsrMatrix;
@@ -240,9 +240,8 @@ mod old {
                     }
                 }
             } else {
-                let con = &mesh.contacts[e - nt];
-                let (ml, mm) = mesh.contact_maps(con);
-                contact_stiffness(&ml, &mm, con.normal, &local[e - nt], ke);
+                let map = contact_map(mesh, &mesh.contacts[e - nt]);
+                contact_stiffness(&map.g[..map.len], &local[e - nt], ke);
             }
         }
     }

@@ -14,9 +14,11 @@
 //! into a small buffer in cache and added into the values at once. The additions into any
 //! entry therefore come in one fixed order (colour, then element, then slot) whatever the
 //! number of threads and however rayon splits the work: the result is bit-identical for
-//! any thread count, with no atomics, no locks, no element buffer and no gather pass. The
-//! first addition into each entry is a store (a flag bit of its scatter position), so the
-//! values need no zeroing pass either.
+//! any thread count, with no atomics, no locks, no element buffer and no gather pass. Each
+//! chunk first zeroes the entries whose first addition it makes (runs of consecutive
+//! positions, computed with the plan), so the zeroing is done in cache just before the
+//! additions, every addition is a plain `+=` (no branch) and there is no separate zeroing
+//! pass over the values.
 //!
 //! Elements may be split into *groups* (consecutive ranges: say the triangles of the
 //! blocks, then the contacts): the colours of group 0 all run before those of group 1, and
@@ -43,11 +45,6 @@ pub const CONSTRAINED: u32 = u32::MAX;
 /// the colouring). Fixed, so that nothing depends on the thread count.
 pub const ELEM_CHUNK: usize = 2048;
 
-/// Flag bit of a scatter position: this slot makes the first addition into its entry
-/// (in the fixed order of a whole assembly), so it stores instead of adding.
-const FIRST: u32 = 1 << 31;
-/// Mask of the position bits of a scatter position.
-const POS: u32 = FIRST - 1;
 /// Scatter position of a slot pair with a [`CONSTRAINED`] row or column.
 const SKIP: u32 = u32::MAX;
 
@@ -146,16 +143,25 @@ pub struct AssemblyPlan {
     group_colour: Vec<usize>,
     /// Whether element e's map is paired (see `map`).
     paired: Vec<bool>,
+    /// Whether every element of chunk c is paired with 6 slots (a CST triangle, a
+    /// vertex-to-edge contact between deformable blocks): its maps are then 12 numbers
+    /// each, and the chunk runs a loop without per-element lookups.
+    chunk_paired6: Vec<bool>,
+    /// The entries whose first addition (in the order of a whole assembly) chunk c makes,
+    /// as runs (start, length) of consecutive positions:
+    /// `zero_runs[chunk_zero[c]..chunk_zero[c + 1]]`. The chunk zeroes them before its
+    /// elements add into them.
+    chunk_zero: Vec<usize>,
+    zero_runs: Vec<(u32, u32)>,
     /// The scatter maps of the elements, one after the other. A *general* map (m slots)
     /// has one position per slot pair, m² of them, in the order (0,0), (0,1), (1,0), (0,2),
     /// (2,0), …, (1,1), (1,2), (2,1), …: each diagonal pair, then each pair right of it
     /// followed by its mirror. A *paired* map (slots 2i, 2i + 1 hold dofs d, d + 1, the
     /// rows d and d + 1 have the same columns, the unknowns are distinct and the four
-    /// entries of every 2×2 block get their first addition from the same element) has
-    /// the n = m/2 row lengths of rows dofs[2i], then one position per block, the
+    /// has the n = m/2 row lengths of rows dofs[2i], then one position per block, the
     /// position of entry (dofs[2i], dofs[2j]), in the same order over the n nodes: the
-    /// block's other entries are at +1, + row length and + row length + 1. Bit 31 of a
-    /// position is [`FIRST`]; [`SKIP`] for a constrained slot.
+    /// block's other entries are at +1, + row length and + row length + 1. [`SKIP`] for
+    /// a constrained slot.
     map: Vec<u32>,
     /// Entries into which no element adds (the diagonal of an unknown no element
     /// touches): every assembly zeroes them.
@@ -226,8 +232,8 @@ impl AssemblyPlan {
     ///
     /// # Panics
     /// If a dof slot is neither [`CONSTRAINED`] nor below `n_dofs`, if `n_dofs >=
-    /// u32::MAX`, if the pattern has 2³¹ − 1 entries or more (the scatter map holds
-    /// 31-bit positions), or if `group_ends` is not as described.
+    /// u32::MAX`, if the pattern has 2³² − 1 entries or more (the scatter map holds
+    /// 32-bit positions), or if `group_ends` is not as described.
     pub fn with_groups(n_dofs: usize, conn: &Connectivity, group_ends: &[usize]) -> Self {
         assert!(n_dofs < u32::MAX as usize, "too many unknowns");
         let n_el = conn.len();
@@ -237,8 +243,8 @@ impl AssemblyPlan {
         );
         let pattern = Arc::new(build_pattern(n_dofs, conn));
         assert!(
-            pattern.nnz() < POS as usize,
-            "{} stored entries: the scatter map holds 31-bit positions",
+            pattern.nnz() < SKIP as usize,
+            "{} stored entries: the scatter map holds 32-bit positions",
             pattern.nnz()
         );
         let mut group_start = vec![0];
@@ -291,38 +297,51 @@ impl AssemblyPlan {
             }
         });
 
-        // flag the first addition into every entry, in the order of a whole assembly
+        // the first addition into every entry, in the order of a whole assembly: which
+        // chunk makes it
         let nnz = pattern.nnz();
         let mut seen = vec![false; nnz];
         let mut first_in_group = vec![Vec::new(); group_ends.len()];
+        let mut chunk_first = vec![Vec::new(); n_chunks];
         for g in 0..group_ends.len() {
             for &c in &colour_chunks[colour_ptr[group_colour[g]]..colour_ptr[group_colour[g + 1]]] {
                 let c = c as usize;
-                for p in &mut general[chunk_general[c]..chunk_general[c + 1]] {
-                    if *p != SKIP && !seen[*p as usize] {
-                        seen[*p as usize] = true;
+                for &p in &general[chunk_general[c]..chunk_general[c + 1]] {
+                    if p != SKIP && !seen[p as usize] {
+                        seen[p as usize] = true;
                         if g > 0 {
-                            first_in_group[g].push(*p);
+                            first_in_group[g].push(p);
                         }
-                        *p |= FIRST;
+                        chunk_first[c].push(p);
                     }
                 }
             }
         }
         let untouched = (0..nnz as u32).filter(|&k| !seen[k as usize]).collect();
+        let chunk_runs: Vec<Vec<(u32, u32)>> = chunk_first
+            .into_par_iter()
+            .map(|mut ps| {
+                ps.sort_unstable();
+                let mut runs: Vec<(u32, u32)> = Vec::new();
+                for p in ps {
+                    match runs.last_mut() {
+                        Some((s, l)) if *s + *l == p => *l += 1,
+                        _ => runs.push((p, 1)),
+                    }
+                }
+                runs
+            })
+            .collect();
+        let chunk_zero = prefix_sum(chunk_runs.iter().map(Vec::len));
+        let zero_runs = chunk_runs.concat();
 
         // paired maps where they apply
-        let paired: Vec<bool> = (0..n_chunks)
+        let paired: Vec<bool> = (0..n_el)
             .into_par_iter()
-            .flat_map_iter(|c| {
-                let mut g = chunk_general[c];
-                (chunk_start[c]..chunk_start[c + 1]).map(move |e| {
-                    let m = conn.slots(e);
-                    g += m * m;
-                    (e, g - m * m, m)
-                })
-            })
-            .map(|(e, g, m)| is_paired(&pattern, conn.dofs(e), &general[g..g + m * m]))
+            .map(|e| is_paired(&pattern, conn.dofs(e)))
+            .collect();
+        let chunk_paired6 = (0..n_chunks)
+            .map(|c| (chunk_start[c]..chunk_start[c + 1]).all(|e| paired[e] && conn.slots(e) == 6))
             .collect();
         let chunk_map = prefix_sum((0..n_chunks).map(|c| {
             (chunk_start[c]..chunk_start[c + 1])
@@ -367,6 +386,9 @@ impl AssemblyPlan {
             colour_chunks,
             group_colour,
             paired,
+            chunk_paired6,
+            chunk_zero,
+            zero_runs,
             map,
             untouched,
             first_in_group,
@@ -430,7 +452,7 @@ impl AssemblyPlan {
             self.general_map(e, &mut pos);
             for &p in &pos {
                 if p != SKIP {
-                    seen[(p & POS) as usize] = true;
+                    seen[p as usize] = true;
                 }
             }
         }
@@ -563,7 +585,8 @@ impl AssemblyPlan {
     }
 
     /// Runs the colours `colours` in order, each colour's chunks in parallel, skipping the
-    /// elements not `active` (when given).
+    /// elements not `active` (when given). Each chunk first zeroes the entries whose first
+    /// addition it makes (in cache, just before its additions), then adds its elements.
     fn run<const FORM: u8, F: Fn(usize, &mut [f64]) + Sync>(
         &self,
         colours: Range<usize>,
@@ -582,9 +605,33 @@ impl AssemblyPlan {
             let chunks = &self.colour_chunks[self.colour_ptr[k]..self.colour_ptr[k + 1]];
             chunks.par_iter().for_each(|&c| {
                 let c = c as usize;
-                let mut buf = Vec::new();
+                for &(start, len) in &self.zero_runs[self.chunk_zero[c]..self.chunk_zero[c + 1]] {
+                    // SAFETY: the runs are positions within the values, and only this
+                    // chunk adds into them in this colour (chunks of one colour share no
+                    // unknown)
+                    unsafe { std::ptr::write_bytes(values.at(start as usize), 0, len as usize) };
+                }
+                let elements = self.chunk_start[c]..self.chunk_start[c + 1];
                 let mut s = self.chunk_map[c];
-                for e in self.chunk_start[c]..self.chunk_start[c + 1] {
+                if self.chunk_paired6[c] {
+                    // every element a paired 6-slot one (12 map numbers): no per-element
+                    // lookups, and n = 3 a literal so that everything unrolls
+                    let maps = &self.map[s..s + 12 * elements.len()];
+                    for (e, map) in elements.zip(maps.chunks_exact(12)) {
+                        if active.is_some_and(|a| !a[e]) {
+                            continue;
+                        }
+                        let mut b = [0.0; 36];
+                        let b = &mut b[..buffer_len(6)];
+                        kernel(e, b);
+                        // SAFETY: the map's positions are within the values, and no other
+                        // thread touches them (chunks of one colour share no unknown)
+                        unsafe { scatter_paired::<FORM>(3, b, map, values) };
+                    }
+                    return;
+                }
+                let mut buf = Vec::new();
+                for e in elements {
                     let m = self.conn.slots(e);
                     let paired = self.paired[e];
                     let map = &self.map[s..s + map_len(m, paired)];
@@ -592,14 +639,14 @@ impl AssemblyPlan {
                     if active.is_some_and(|a| !a[e]) {
                         continue;
                     }
-                    // SAFETY (both scatters): chunks of one colour share no unknown, so this
+                    // SAFETY (every scatter): chunks of one colour share no unknown, so this
                     // thread is the only one touching these positions, all within the values
-                    if paired && m == 6 {
-                        // the CST triangle: n = 3 as a literal, so that everything unrolls
-                        let mut b = [0.0; 36];
-                        let b = &mut b[..buffer_len(6)];
+                    if paired && m == 4 {
+                        // a contact between deformable nodes: n = 2 a literal
+                        let mut b = [0.0; 16];
+                        let b = &mut b[..buffer_len(4)];
                         kernel(e, b);
-                        unsafe { scatter_paired::<FORM>(3, b, map, values) };
+                        unsafe { scatter_paired::<FORM>(2, b, map, values) };
                         continue;
                     }
                     buf.clear();
@@ -663,7 +710,7 @@ impl AssemblyPlan {
         for &e in changed {
             self.general_map(e, &mut pos);
             for &p in &pos {
-                let k = (p & POS) as usize;
+                let k = p as usize;
                 if p != SKIP && marked[k / 64] & (1 << (k % 64)) == 0 {
                     marked[k / 64] |= 1 << (k % 64);
                     entries.push(k);
@@ -671,7 +718,7 @@ impl AssemblyPlan {
             }
         }
         let is_marked = |p: u32| {
-            let k = (p & POS) as usize;
+            let k = p as usize;
             p != SKIP && marked[k / 64] & (1 << (k % 64)) != 0
         };
         // the elements of groups ≥ g0 that add into one of them, in assembly order
@@ -742,8 +789,7 @@ impl AssemblyPlan {
         out.resize(m * m, SKIP);
         for_pairs(m, |k, a, b| {
             let p = blocks[general_index(n, a / 2, b / 2)];
-            let offset = (a % 2) as u32 * lens[a / 2] + (b % 2) as u32;
-            out[k] = (p & FIRST) | ((p & POS) + offset);
+            out[k] = p + (a % 2) as u32 * lens[a / 2] + (b % 2) as u32;
         });
     }
 
@@ -874,41 +920,22 @@ fn scatter_element<const FORM: u8, P: FnMut(u32, f64)>(
     }
 }
 
-/// Adds `v` into the entry at scatter position `p` (stores it, for the entry's first
-/// addition; nothing for [`SKIP`]).
+/// Adds `v` into the entry at scatter position `p` (nothing for [`SKIP`]).
 ///
 /// # Safety
-/// `p & POS` is within the array `values` points to, and no other thread accesses it.
+/// `p` is [`SKIP`] or within the array `values` points to, and no other thread accesses
+/// it.
 #[inline(always)]
 unsafe fn put(values: SharedValues, p: u32, v: f64) {
     if p != SKIP {
         // SAFETY: as the function's contract
-        unsafe { add_into(values.at((p & POS) as usize), p & FIRST != 0, v) };
-    }
-}
-
-/// `*q = v` for an entry's first addition, else `*q += v`. A branch rather than a select:
-/// the first addition into an entry is usually the first touch of its cache line in an
-/// assembly, and a store that misses the cache does not stall the core, where the load of
-/// a select would.
-///
-/// # Safety
-/// `q` is valid for reads and writes and no other thread accesses it.
-#[inline(always)]
-unsafe fn add_into(q: *mut f64, first: bool, v: f64) {
-    // SAFETY: as the function's contract
-    unsafe {
-        if first {
-            *q = v;
-        } else {
-            *q += v;
-        }
+        unsafe { *values.at(p as usize) += v };
     }
 }
 
 /// Adds the matrix of a paired element (n nodes, `buf` in the form `FORM`) through its
-/// paired map (see [`AssemblyPlan`]'s `map`): block by block, each block's four entries
-/// with one flag. The same additions, in the same order per entry, as
+/// paired map (see [`AssemblyPlan`]'s `map`): block by block, each block as two pairs of
+/// consecutive entries (one 16-byte load, add and store each). The same additions, in the same order per entry, as
 /// [`scatter_element`] on the general map. Plain loops (no closures), so that with a
 /// literal `n` everything unrolls into constant offsets.
 ///
@@ -958,16 +985,28 @@ unsafe fn add_block<const FORM: u8>(
         SYMMETRISED if a != b => 0.5 * (buf[a * m + b] + buf[b * m + a]),
         _ => buf[a * m + b],
     };
-    let first = p & FIRST != 0;
-    let r0 = (p & POS) as usize;
+    let r0 = p as usize;
     let r1 = r0 + len as usize;
     let (a, b) = (2 * i, 2 * j);
     // SAFETY: as the function's contract
     unsafe {
-        add_into(values.at(r0), first, val(a, b));
-        add_into(values.at(r0 + 1), first, val(a, b + 1));
-        add_into(values.at(r1), first, val(a + 1, b));
-        add_into(values.at(r1 + 1), first, val(a + 1, b + 1));
+        add_pair(values.at(r0), [val(a, b), val(a, b + 1)]);
+        add_pair(values.at(r1), [val(a + 1, b), val(a + 1, b + 1)]);
+    }
+}
+
+/// `q[0] += v[0]; q[1] += v[1]`, written so that it compiles to one vector load, add and
+/// store.
+///
+/// # Safety
+/// `q` and `q + 1` are valid for reads and writes and no other thread accesses them.
+#[inline(always)]
+unsafe fn add_pair(q: *mut f64, v: [f64; 2]) {
+    // SAFETY: as the function's contract
+    unsafe {
+        let q = q.cast::<[f64; 2]>();
+        let old = q.read_unaligned();
+        q.write_unaligned([old[0] + v[0], old[1] + v[1]]);
     }
 }
 
@@ -992,9 +1031,8 @@ fn general_index(m: usize, a: usize, b: usize) -> usize {
     }
 }
 
-/// Whether an element's map can be paired (see [`AssemblyPlan`]'s `map`); `general` is its
-/// general map with the flags.
-fn is_paired(pattern: &CsrPattern, dofs: &[u32], general: &[u32]) -> bool {
+/// Whether an element's map can be paired (see [`AssemblyPlan`]'s `map`).
+fn is_paired(pattern: &CsrPattern, dofs: &[u32]) -> bool {
     let m = dofs.len();
     if m == 0 || !m.is_multiple_of(2) {
         return false;
@@ -1004,22 +1042,10 @@ fn is_paired(pattern: &CsrPattern, dofs: &[u32], general: &[u32]) -> bool {
         let d = dofs[2 * i];
         d != CONSTRAINED
             && dofs[2 * i + 1] == d + 1
-            && !(0..i).any(|k| dofs[2 * k] == d)
+            && !(0..i).any(|k| dofs[2 * k].abs_diff(d) < 2)
             && pattern.row_cols(d as usize) == pattern.row_cols(d as usize + 1)
     };
-    if !(0..n).all(node_ok) {
-        return false;
-    }
-    // the four entries of a block share the first-addition flag
-    let flag = |a: usize, b: usize| general[general_index(m, a, b)] & FIRST;
-    let mut same = true;
-    for_pairs(n, |_, i, j| {
-        let f = flag(2 * i, 2 * j);
-        same &= flag(2 * i, 2 * j + 1) == f
-            && flag(2 * i + 1, 2 * j) == f
-            && flag(2 * i + 1, 2 * j + 1) == f;
-    });
-    same
+    (0..n).all(node_ok)
 }
 
 /// Calls `f(c, piece)` in parallel for the pieces `data[offsets[c]..offsets[c + 1]]`.
@@ -1038,7 +1064,7 @@ fn for_chunk_pieces<T: Send>(
     pieces.into_par_iter().for_each(|(c, piece)| f(c, piece));
 }
 
-/// Zeroes the entries `list` (scatter positions without flags), in parallel.
+/// Zeroes the entries `list` (scatter positions), in parallel.
 ///
 /// # Safety
 /// The positions are distinct and within the array `values` points to.

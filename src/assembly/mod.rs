@@ -9,7 +9,9 @@
 //! comes back (the static driver assembles every iteration matrix of an increment on the
 //! last converged geometry), it is kept, and the next assemblies on that geometry add only
 //! the contacts onto it (bit-identical to a whole assembly: the plan's groups), or
-//! ([`System::stiffness_update`]) only the contacts whose local stiffness changed.
+//! ([`System::stiffness_update`]) only the contacts whose local stiffness changed. The
+//! contacts' gradients (their point maps along the normal and the tangent) are kept with
+//! it, so that a contact's kernel on a kept geometry is a few products per entry.
 
 pub mod loads;
 pub mod mass;
@@ -24,14 +26,16 @@ use crate::mesh::{Contact, Mesh, PointMap};
 use crate::geometry::polygon::Point;
 use crate::scene::Scene;
 use dfem_kernels::{unpack_symmetric, AssemblyPlan, Connectivity, CsrMatrix, Form, CONSTRAINED};
+use rayon::prelude::*;
 use std::sync::Mutex;
 
 /// Element groups of a [`System`]'s plan.
 const TRIANGLES: usize = 0;
 const CONTACTS: usize = 1;
 
-/// The assembly plan of a mesh: triangles (6 slots each) then contacts (6 slots each:
-/// the 3 unknowns node l depends on, then node m's).
+/// The assembly plan of a mesh: triangles (6 slots each) then contacts (the free unknowns
+/// their l point depends on, then their m point's: 4 for two deformable nodes; see
+/// [`contact_map`]).
 pub struct System {
     pub plan: AssemblyPlan,
     pub n_triangles: usize,
@@ -43,7 +47,11 @@ pub struct System {
     /// Per material: D_v (Pa·s, the viscous Lamé constants) times the thickness (m);
     /// empty unless the system is built for dynamics.
     dv: Vec<[[f64; 3]; 3]>,
-    /// The triangles' part of K on the last geometry seen twice.
+    /// Contact c's slots are `contact_ptr[c]..contact_ptr[c + 1]` in a gradient array
+    /// ([`Self::contact_gradients`]).
+    contact_ptr: Vec<usize>,
+    /// The triangles' part of K on the last geometry seen twice, and the contacts'
+    /// gradients on the last geometry.
     blocks: Mutex<BlockCache>,
     /// In a distributed run ([`Mesh::ranks`]): the elements this process evaluates and the
     /// exchange of the rows; `None` in a serial run.
@@ -57,6 +65,29 @@ struct BlockCache {
     nodes: Vec<Point>,
     /// The triangles' part of K (N/m) on that geometry, once it has been seen twice.
     values: Option<CsrMatrix>,
+    /// The contacts' gradients ([`System::contact_gradients`]) on that geometry, with the
+    /// rest of what they depend on ([`contact_key`]); empty when not computed yet.
+    gradients: Vec<[f64; 2]>,
+    key: Vec<u64>,
+}
+
+/// What the contacts' gradients depend on besides the node positions, as bits: every
+/// contact's normal and position along its edge, every rigid block's centroid.
+fn contact_key(mesh: &Mesh) -> impl Iterator<Item = u64> + '_ {
+    let contacts = mesh.contacts.iter().flat_map(|c| {
+        [
+            c.normal[0].to_bits(),
+            c.normal[1].to_bits(),
+            c.along.map_or(u64::MAX, f64::to_bits),
+        ]
+    });
+    let centroids = mesh.blocks.iter().flat_map(|b| match b.dofs {
+        crate::mesh::BlockDofs::Rigid { centroid, .. } => {
+            [centroid[0].to_bits(), centroid[1].to_bits()]
+        }
+        _ => [u64::MAX; 2],
+    });
+    contacts.chain(centroids)
 }
 
 /// Local stiffness of a contact in its (n, s) frame (N/m): row = force component,
@@ -106,12 +137,11 @@ impl System {
             }
             conn.push(&dofs);
         }
+        let mut contact_ptr = vec![0];
         for c in &mesh.contacts {
-            let (ml, mm) = mesh.contact_maps(c);
-            let mut dofs = [CONSTRAINED; 12];
-            dofs[..ml.len].copy_from_slice(&ml.dofs[..ml.len]);
-            dofs[ml.len..ml.len + mm.len].copy_from_slice(&mm.dofs[..mm.len]);
-            conn.push(&dofs[..ml.len + mm.len]);
+            let map = contact_map(mesh, c);
+            conn.push(&map.dofs[..map.len]);
+            contact_ptr.push(contact_ptr[contact_ptr.len() - 1] + map.len);
         }
         let mut group_ends = vec![conn.len(); 2];
         group_ends[TRIANGLES] = mesh.triangles.len();
@@ -154,6 +184,7 @@ impl System {
             tri_material,
             dt,
             dv,
+            contact_ptr,
             blocks: Mutex::new(BlockCache::default()),
             rows,
         }
@@ -188,57 +219,98 @@ impl System {
     ///
     /// The second time in a row that the node positions are the same (to the bit), the
     /// triangles' part is kept, and from then on, while they stay the same, only the
-    /// contacts are assembled, onto a copy of it. The result is bit-identical either way.
+    /// contacts are assembled, onto a copy of it. The contacts' gradients are kept while
+    /// the geometry stays the same. The result is bit-identical either way.
     pub fn stiffness_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
-        let mut cache = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
-        if same_nodes(&cache.nodes, &mesh.nodes) {
-            let form = self.form(local);
-            let kernel =
-                |e: usize, ke: &mut [f64]| self.element(mesh, &self.dt, local, form, e, ke);
-            if cache.values.is_none() {
-                let mut b = CsrMatrix::zeros(self.plan.pattern().clone());
-                let packed = |e: usize, ke: &mut [f64]| {
-                    self.element(mesh, &self.dt, local, Form::Packed, e, ke)
-                };
-                self.plan.assemble_groups_of(
-                    Form::Packed,
-                    0..CONTACTS,
-                    None,
-                    self.active(),
-                    packed,
-                    &mut b,
-                );
-                cache.values = Some(b);
-            }
-            let base = cache.values.as_ref();
-            let groups = CONTACTS..self.plan.n_groups();
-            self.plan
-                .assemble_groups_of(form, groups, base, self.active(), kernel, out);
-            self.complete(out);
-        } else {
-            cache.nodes.clear();
-            cache.nodes.extend_from_slice(&mesh.nodes);
-            cache.values = None;
-            self.assemble_all(mesh, &self.dt, local, out);
+        let mut guard = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
+        let same = same_nodes(&guard.nodes, &mesh.nodes);
+        if !same {
+            guard.nodes.clear();
+            guard.nodes.extend_from_slice(&mesh.nodes);
+            guard.values = None;
+            guard.gradients.clear();
+        }
+        self.keep_gradients(mesh, &mut guard);
+        let cache = &mut *guard;
+        let g = &cache.gradients;
+        if !same {
+            return self.assemble_all(mesh, &self.dt, g, local, out);
+        }
+        if cache.values.is_none() {
+            let mut b = CsrMatrix::zeros(self.plan.pattern().clone());
+            self.plan.assemble_groups_of(
+                Form::Packed,
+                0..CONTACTS,
+                None,
+                self.active(),
+                // inlined into the plan's loop: a triangle's values stay in registers
+                #[inline(always)]
+                |e: usize, ke: &mut [f64]| {
+                    self.element(mesh, &self.dt, g, local, Form::Packed, e, ke)
+                },
+                &mut b,
+            );
+            cache.values = Some(b);
+        }
+        let form = self.form(local);
+        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, &self.dt, g, local, form, e, ke);
+        let base = cache.values.as_ref();
+        let groups = CONTACTS..self.plan.n_groups();
+        self.plan
+            .assemble_groups_of(form, groups, base, self.active(), kernel, out);
+        self.complete(out);
+    }
+
+    /// Makes `cache.gradients` those of `mesh` (the caller has cleared them if the node
+    /// positions changed): recomputed when empty or when a normal, a position along an edge
+    /// or a rigid centroid changed.
+    fn keep_gradients(&self, mesh: &Mesh, cache: &mut BlockCache) {
+        if cache.gradients.is_empty() || !cache.key.iter().copied().eq(contact_key(mesh)) {
+            cache.gradients = self.contact_gradients(mesh);
+            cache.key.clear();
+            cache.key.extend(contact_key(mesh));
         }
     }
 
-    /// Stiffness (N/m) like [`Self::stiffness_into`], every element assembled (no kept
-    /// triangles' part, which it neither uses nor changes).
+    /// Stiffness (N/m) like [`Self::stiffness_into`], every element assembled and every
+    /// contact's gradients computed (no kept triangles' part or gradients, which it neither
+    /// uses nor changes).
     pub fn stiffness_full_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
-        self.assemble_all(mesh, &self.dt, local, out);
+        let g = self.contact_gradients(mesh);
+        self.assemble_all(mesh, &self.dt, &g, local, out);
+    }
+
+    /// The gradients gₙ, gₛ of every contact's relative displacements with respect to its
+    /// free unknowns ([`contact_map`]; 1, or m for a rigid block's rotation), contact c's
+    /// at `contact_ptr[c]..contact_ptr[c + 1]`, as [gₙ, gₛ] per unknown.
+    fn contact_gradients(&self, mesh: &Mesh) -> Vec<[f64; 2]> {
+        let g: Vec<[f64; 2]> = mesh
+            .contacts
+            .par_iter()
+            .flat_map_iter(|c| {
+                let map = contact_map(mesh, c);
+                map.g.into_iter().take(map.len)
+            })
+            .collect();
+        assert_eq!(
+            g.len(),
+            self.contact_ptr[self.n_contacts],
+            "the system's mesh"
+        );
+        g
     }
 
     /// Every element assembled, the triangles with the material matrices `d` (`dt` for
-    /// stiffness, `dv` for damping).
+    /// stiffness, `dv` for damping), the contacts with the gradients `g`.
     fn assemble_all(
         &self,
         mesh: &Mesh,
         d: &[[[f64; 3]; 3]],
+        g: &[[f64; 2]],
         local: &[LocalStiffness],
         out: &mut CsrMatrix,
     ) {
-        self.assemble_own(mesh, d, local, out);
+        self.assemble_own(mesh, d, g, local, out);
         self.complete(out);
     }
 
@@ -248,22 +320,31 @@ impl System {
         &self,
         mesh: &Mesh,
         d: &[[[f64; 3]; 3]],
+        g: &[[f64; 2]],
         local: &[LocalStiffness],
         out: &mut CsrMatrix,
     ) {
         let form = self.form(local);
-        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, d, local, form, e, ke);
         let groups = 0..self.plan.n_groups();
-        self.plan
-            .assemble_groups_of(form, groups, None, self.active(), kernel, out);
+        self.plan.assemble_groups_of(
+            form,
+            groups,
+            None,
+            self.active(),
+            // inlined into the plan's loop: a triangle's values stay in registers
+            #[inline(always)]
+            |e: usize, ke: &mut [f64]| self.element(mesh, d, g, local, form, e, ke),
+            out,
+        );
     }
 
     /// The update path: `out` holds [`Self::stiffness_into`]`(mesh, prev, out)` (and has
     /// not been changed since); this makes it `stiffness_into(mesh, local, out)`, bit for
     /// bit, re-assembling only the entries of the contacts whose local stiffness differs
-    /// from `prev` (with the kept triangles' part). When the node positions are not those
-    /// of the kept triangles' part, or more than 1/8 of the contacts changed, it assembles
-    /// all the contacts (or everything) instead; with none changed, it does nothing.
+    /// from `prev` (with the kept triangles' part and gradients). When the geometry is not
+    /// that of the kept triangles' part, or more than 1/8 of the contacts changed, it
+    /// assembles all the contacts (or everything) instead; with none changed, it does
+    /// nothing.
     pub fn stiffness_update(
         &self,
         mesh: &Mesh,
@@ -286,7 +367,10 @@ impl System {
             return self.stiffness_into(mesh, local, out);
         }
         let cache = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
-        let kept = same_nodes(&cache.nodes, &mesh.nodes) && cache.values.is_some();
+        let kept = same_nodes(&cache.nodes, &mesh.nodes)
+            && cache.values.is_some()
+            && !cache.gradients.is_empty()
+            && cache.key.iter().copied().eq(contact_key(mesh));
         if !kept || 8 * changed.len() > self.n_contacts {
             drop(cache);
             return self.stiffness_into(mesh, local, out);
@@ -298,7 +382,8 @@ impl System {
         } else {
             Form::Unsymmetric
         };
-        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, &self.dt, local, form, e, ke);
+        let g = &cache.gradients;
+        let kernel = |e: usize, ke: &mut [f64]| self.element(mesh, &self.dt, g, local, form, e, ke);
         self.plan
             .reassemble(form, &changed, cache.values.as_ref(), kernel, out);
     }
@@ -308,7 +393,8 @@ impl System {
     /// Cₑ = t A Bᵀ D_v B for the triangles and Tᵀ C′ T for the contacts, with a local
     /// viscosity per contact (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h where they act).
     pub fn damping_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
-        self.assemble_all(mesh, &self.dv, local, out);
+        let g = self.contact_gradients(mesh);
+        self.assemble_all(mesh, &self.dv, &g, local, out);
     }
 
     /// Packed when every contact's local matrix is symmetric, else unsymmetric.
@@ -321,13 +407,17 @@ impl System {
     }
 
     /// Element `e`'s matrix in `form` ([`Form::Packed`] or [`Form::Unsymmetric`]): a
-    /// triangle with the material matrices `d` (per material), a contact with its local
-    /// matrix. A symmetric element matrix is computed packed in either form, so that an
-    /// element adds the same values whatever the form.
+    /// triangle with the material matrices `d` (per material), a contact with its
+    /// gradients in `g` ([`Self::contact_gradients`]) and its local matrix. A symmetric
+    /// element matrix is computed packed in either form, so that an element adds the same
+    /// values whatever the form.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn element(
         &self,
         mesh: &Mesh,
         d: &[[[f64; 3]; 3]],
+        g: &[[f64; 2]],
         local: &[LocalStiffness],
         form: Form,
         e: usize,
@@ -345,18 +435,8 @@ impl System {
             }
         } else if e < nt + nc {
             let c = e - nt;
-            let con = &mesh.contacts[c];
-            let (ml, mm) = mesh.contact_maps(con);
-            let k = &local[c];
-            match (form, symmetric(k)) {
-                (Form::Packed, _) => contact_stiffness_packed(&ml, &mm, con.normal, k, ke),
-                (_, true) => {
-                    let mut packed = [0.0; 78];
-                    contact_stiffness_packed(&ml, &mm, con.normal, k, &mut packed);
-                    unpack_symmetric(ml.len + mm.len, &packed, ke);
-                }
-                _ => contact_stiffness(&ml, &mm, con.normal, k, ke),
-            }
+            let g = &g[self.contact_ptr[c]..self.contact_ptr[c + 1]];
+            contact_element(g, &local[c], form, ke);
         }
         // else: the rigid blocks' diagonal elements (dynamics) carry no stiffness (`ke`
         // is zeroed by the plan)
@@ -365,6 +445,20 @@ impl System {
     /// tDₑ (Pa·m) of triangle `t`.
     pub fn tri_dt(&self, t: usize) -> &[[f64; 3]; 3] {
         &self.dt[self.tri_material[t] as usize]
+    }
+}
+
+/// A contact's matrix in `form` from its gradients ([`System::element`]).
+#[inline(never)]
+fn contact_element(g: &[[f64; 2]], k: &LocalStiffness, form: Form, ke: &mut [f64]) {
+    match (form, symmetric(k)) {
+        (Form::Packed, _) => contact_stiffness_packed(g, k, ke),
+        (_, true) => {
+            let mut packed = [0.0; 78];
+            contact_stiffness_packed(g, k, &mut packed);
+            unpack_symmetric(g.len(), &packed, ke);
+        }
+        _ => contact_stiffness(g, k, ke),
     }
 }
 
@@ -400,15 +494,17 @@ pub fn cst_stiffness(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
 /// ([`cst_b`]), so K_ij = 1/(4A) [[bᵢ,0,cᵢ],[0,cᵢ,bᵢ]] (tDₑ) [[bⱼ,0],[0,cⱼ],[cⱼ,bⱼ]]: 14
 /// products per node for (tDₑ)Bⱼ/(4A), then 2 per entry, 84 in all (the dense triple
 /// product of [`cst_b`]'s matrices takes 324), and the lower triangle is not computed.
+#[inline(always)]
 pub fn cst_stiffness_packed(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
     let ke: &mut [f64; 21] = (&mut ke[..21]).try_into().expect("21 values");
     let b = [p[1][1] - p[2][1], p[2][1] - p[0][1], p[0][1] - p[1][1]];
     let c = [p[2][0] - p[1][0], p[0][0] - p[2][0], p[1][0] - p[0][0]];
-    // 1/(4A), A the signed area
+    // 1/(4A), A the signed area: applied last, so that the division's latency overlaps
+    // the products (nothing else waits for it)
     let f = 0.5 / (b[0] * c[1] - b[1] * c[0]);
-    // (tDₑ) Bⱼ / (4A): its x column and its y column, per node j
+    // (tDₑ) Bⱼ 2A: its x column and its y column, per node j
     let db: [[[f64; 3]; 2]; 3] = std::array::from_fn(|j| {
-        let (bj, cj) = (f * b[j], f * c[j]);
+        let (bj, cj) = (b[j], c[j]);
         [
             std::array::from_fn(|r| dt[r][0] * bj + dt[r][2] * cj),
             std::array::from_fn(|r| dt[r][1] * cj + dt[r][2] * bj),
@@ -417,9 +513,9 @@ pub fn cst_stiffness_packed(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
     let mut t = 0;
     for i in 0..3 {
         let (bi, ci) = (b[i], c[i]);
-        // row x of node i: [bᵢ, 0, cᵢ] · column; row y: [0, cᵢ, bᵢ] · column
-        let rx = |d: &[f64; 3]| bi * d[0] + ci * d[2];
-        let ry = |d: &[f64; 3]| ci * d[1] + bi * d[2];
+        // row x of node i: [bᵢ, 0, cᵢ] · column; row y: [0, cᵢ, bᵢ] · column; times 1/(4A)
+        let rx = |d: &[f64; 3]| f * (bi * d[0] + ci * d[2]);
+        let ry = |d: &[f64; 3]| f * (ci * d[1] + bi * d[2]);
         for d in &db[i..] {
             ke[t] = rx(&d[0]);
             ke[t + 1] = rx(&d[1]);
@@ -450,83 +546,84 @@ pub fn contact_gradient(ml: &PointMap, mm: &PointMap, dir: Point) -> [f64; 12] {
     g
 }
 
-/// Call `f(dof, gₙ, gₛ)` for each free unknown of contact `c`, with the gradients of its
-/// relative displacements δₙ, δₛ ([`contact_gradient`]).
-fn for_contact_dofs(mesh: &Mesh, c: &Contact, mut f: impl FnMut(usize, f64, f64)) {
+/// A contact's free unknowns and the gradients of its relative displacements with respect
+/// to them ([`contact_map`]).
+#[derive(Debug, Clone, Copy)]
+pub struct ContactMap {
+    /// Number of free unknowns (4 for two deformable nodes, at most 9).
+    pub len: usize,
+    /// The free unknowns: the l point's, then the m point's, without the constrained
+    /// slots of [`Mesh::contact_maps`] (a deformable node's rotation, a fixed block's).
+    pub dofs: [u32; 12],
+    /// [gₙ, gₛ] per free unknown: the gradients of δₙ = n·(u_m − u_l) and
+    /// δₛ = s·(u_m − u_l), s = (−n_y, n_x) ([`contact_gradient`]; 1, or m for a rotation).
+    pub g: [[f64; 2]; 12],
+}
+
+/// Contact `c`'s free unknowns and gradients ([`ContactMap`]).
+pub fn contact_map(mesh: &Mesh, c: &Contact) -> ContactMap {
     let (ml, mm) = mesh.contact_maps(c);
-    let gn = contact_gradient(&ml, &mm, c.normal);
-    let gs = contact_gradient(&ml, &mm, [-c.normal[1], c.normal[0]]);
-    for i in 0..ml.len + mm.len {
-        let dof = if i < ml.len {
-            ml.dofs[i]
-        } else {
-            mm.dofs[i - ml.len]
-        };
+    let n = c.normal;
+    let gn = contact_gradient(&ml, &mm, n);
+    let gs = contact_gradient(&ml, &mm, [-n[1], n[0]]);
+    let mut map = ContactMap {
+        len: 0,
+        dofs: [CONSTRAINED; 12],
+        g: [[0.0; 2]; 12],
+    };
+    let dofs = ml.dofs[..ml.len].iter().chain(&mm.dofs[..mm.len]);
+    for (i, &dof) in dofs.enumerate() {
         if dof != CONSTRAINED {
-            f(dof as usize, gn[i], gs[i]);
+            map.dofs[map.len] = dof;
+            map.g[map.len] = [gn[i], gs[i]];
+            map.len += 1;
         }
     }
+    map
 }
 
 /// Add the local force [Fₙ, Fₛ] (N) of contact `c` to the global vector `out`:
 /// out += Fₙ gₙ + Fₛ gₛ (the contact's share of F_int, METHOD.md §3).
 pub fn add_contact_force(mesh: &Mesh, c: &Contact, f: [f64; 2], out: &mut [f64]) {
-    for_contact_dofs(mesh, c, |d, gn, gs| out[d] += f[0] * gn + f[1] * gs);
+    let map = contact_map(mesh, c);
+    for (&d, g) in map.dofs.iter().zip(&map.g).take(map.len) {
+        out[d as usize] += f[0] * g[0] + f[1] * g[1];
+    }
 }
 
-/// Contact stiffness (N/m) K = Tᵀ K′ T mapped to the unknowns: Σ_ab g_a k_ab g_bᵀ over
-/// a, b ∈ {n, s}, with gₙ, gₛ the gradients of δₙ = n·(u_m − u_l) and
-/// δₛ = s·(u_m − u_l), s = (−n_y, n_x). For elastic springs, kₙ gₙ gₙᵀ + kₛ gₛ gₛᵀ.
-/// `ke` is row-major, (ml.len + mm.len)².
-pub fn contact_stiffness(
-    ml: &PointMap,
-    mm: &PointMap,
-    n: Point,
-    k: &LocalStiffness,
-    ke: &mut [f64],
-) {
-    let (g, len) = contact_gradients(ml, mm, n);
+/// Contact stiffness (N/m) K = Tᵀ K′ T mapped to the contact's free unknowns:
+/// Σ_ab g_a k_ab g_bᵀ over a, b ∈ {n, s}, with `g` the [gₙ, gₛ] of each unknown
+/// ([`ContactMap::g`]). For elastic springs, kₙ gₙ gₙᵀ + kₛ gₛ gₛᵀ. `ke` is row-major,
+/// len².
+pub fn contact_stiffness(g: &[[f64; 2]], k: &LocalStiffness, ke: &mut [f64]) {
+    let len = g.len();
     for i in 0..len {
         for j in 0..len {
-            ke[len * i + j] = contact_entry(&g, k, i, j);
+            ke[len * i + j] = contact_entry(g, k, i, j);
         }
     }
 }
 
 /// [`contact_stiffness`] for a symmetric `k`: the upper triangle packed by rows
 /// (len (len + 1)/2 values), half the work and symmetric by construction.
-pub fn contact_stiffness_packed(
-    ml: &PointMap,
-    mm: &PointMap,
-    n: Point,
-    k: &LocalStiffness,
-    ke: &mut [f64],
-) {
-    let (g, len) = contact_gradients(ml, mm, n);
+pub fn contact_stiffness_packed(g: &[[f64; 2]], k: &LocalStiffness, ke: &mut [f64]) {
+    let len = g.len();
     let mut t = 0;
     for i in 0..len {
         for j in i..len {
-            ke[t] = contact_entry(&g, k, i, j);
+            ke[t] = contact_entry(g, k, i, j);
             t += 1;
         }
     }
 }
 
-/// gₙ and gₛ ([`contact_gradient`]) and the number of slots.
-fn contact_gradients(ml: &PointMap, mm: &PointMap, n: Point) -> ([[f64; 12]; 2], usize) {
-    let g = [
-        contact_gradient(ml, mm, n),
-        contact_gradient(ml, mm, [-n[1], n[0]]),
-    ];
-    (g, ml.len + mm.len)
-}
-
 /// Entry (i, j) of Σ_ab g_a k_ab g_bᵀ.
-fn contact_entry(g: &[[f64; 12]; 2], k: &LocalStiffness, i: usize, j: usize) -> f64 {
+#[inline(always)]
+fn contact_entry(g: &[[f64; 2]], k: &LocalStiffness, i: usize, j: usize) -> f64 {
     let mut v = 0.0;
     for a in 0..2 {
         for b in 0..2 {
-            v += g[a][i] * k[a][b] * g[b][j];
+            v += g[i][a] * k[a][b] * g[j][b];
         }
     }
     v
@@ -539,6 +636,16 @@ mod tests {
     use crate::scene::Plane;
     use dfem_kernels::same_bits;
 
+    /// The built-in wall example of deformable bricks, meshed at 0.1 m.
+    fn meshed_wall() -> (crate::scene::Scene, Mesh) {
+        let text = crate::scene::examples::get("wall")
+            .unwrap()
+            .replace("joint = 0.0\n", "joint = 0.0\nmesh_size = 0.1\n");
+        let scene = crate::scene::parse_str(&text, None).unwrap();
+        let mesh = crate::mesh::build(&scene);
+        (scene, mesh)
+    }
+
     /// The rows of a distributed assembly, simulated in one process: each of 3 ranks
     /// evaluates only the elements touching its own unknowns (block partition), and its
     /// rows, exchanged, rebuild the whole stiffness matrix bit for bit (the same additions
@@ -547,11 +654,7 @@ mod tests {
     /// spring stiffnesses per contact, so that a missing or doubled element shows.
     #[test]
     fn distributed_rows_rebuild_the_serial_matrix() {
-        let text = crate::scene::examples::get("wall")
-            .unwrap()
-            .replace("joint = 0.0\n", "joint = 0.0\nmesh_size = 0.1\n");
-        let scene = crate::scene::parse_str(&text, None).unwrap();
-        let mesh = crate::mesh::build(&scene);
+        let (scene, mesh) = meshed_wall();
         assert!(mesh.triangles.len() > 500 && mesh.contacts.len() > 100);
         let local: Vec<LocalStiffness> = (0..mesh.contacts.len())
             .map(|c| [[1e9 * (1.0 + c as f64 / 7.0), 0.0], [0.0, 3e8 + c as f64]])
@@ -582,7 +685,8 @@ mod tests {
             );
             let mut own = CsrMatrix::zeros(sys.plan.pattern().clone());
             own.values.fill(f64::NAN);
-            sys.assemble_own(&m, &sys.dt, &local, &mut own);
+            let g = sys.contact_gradients(&m);
+            sys.assemble_own(&m, &sys.dt, &g, &local, &mut own);
             all.extend(rows.pack(&own));
             last = Some((sys, own));
         }
@@ -591,6 +695,35 @@ mod tests {
         sys.rows.as_ref().unwrap().unpack(&all, &mut out);
         assert_eq!(out.pattern.col_idx(), k.pattern.col_idx());
         assert!(same_bits(&out.values, &k.values));
+    }
+
+    /// The contacts' gradients kept with the geometry follow it: with the node positions
+    /// unchanged but every contact normal turned by 0.1 rad, the kept path (triangles'
+    /// part and gradients kept from the calls before) gives the matrix of a full
+    /// assembly on the turned normals, to the bit, and not the one of the old normals.
+    #[test]
+    fn kept_gradients_follow_the_normals() {
+        let (scene, mesh) = meshed_wall();
+        let sys = System::new(&scene, &mesh);
+        let springs = crate::material::ContactSprings { kn: 1e9, ks: 3e8 };
+        let local = vec![diagonal(springs); mesh.contacts.len()];
+        let zeros = || CsrMatrix::zeros(sys.plan.pattern().clone());
+        let mut before = zeros();
+        for _ in 0..2 {
+            sys.stiffness_into(&mesh, &local, &mut before);
+        }
+        let mut turned = mesh.clone();
+        let (sin, cos) = 0.1f64.sin_cos();
+        for c in &mut turned.contacts {
+            let n = c.normal;
+            c.normal = [cos * n[0] - sin * n[1], sin * n[0] + cos * n[1]];
+        }
+        let mut kept = zeros();
+        sys.stiffness_into(&turned, &local, &mut kept);
+        let mut full = zeros();
+        sys.stiffness_full_into(&turned, &local, &mut full);
+        assert!(same_bits(&kept.values, &full.values));
+        assert!(!same_bits(&kept.values, &before.values));
     }
 
     #[test]

@@ -84,10 +84,10 @@ fn wall_30_settles_under_gravity() {
     check(30);
 }
 
-/// The 60 × 60 wall (43,082 unknowns) that stalled: 45–140 s in release on the 2-core
-/// machine, over the suite's 30 s limit.
+/// The 60 × 60 wall (43,082 unknowns) that stalled at 3.5·10⁻⁵ of the load: 59
+/// iterations, about 25 s in release on the 2-core machine under load (no smaller wall
+/// that stalled was found: 60 × 24, 60 × 40, 70 × 30 and 50 × 50 converged before).
 #[test]
-#[ignore = "about a minute in release (43,082 unknowns); cargo test --release --test statics_wall_gravity -- --ignored"]
 fn wall_60_settles_under_gravity() {
     check(60);
 }

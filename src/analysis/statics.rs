@@ -188,6 +188,30 @@ impl Settings {
 /// ε of the blended step K_s + ε K₀ taken when the secant matrix is singular.
 const BLEND: f64 = 1e-2;
 
+/// ε of the mechanism step K_s + ε K₀ of [`Driver::free_motion`]: small enough that the
+/// step is the free motion of the blocks held only by slipping and open contacts, many
+/// times the distance to where one of them sticks, which the search then finds.
+const MODE_BLEND: f64 = 1e-6;
+/// A singular iteration whose line search keeps more than this fraction of the
+/// out-of-balance norm is followed by a [`Driver::free_motion`].
+const MODE_PROGRESS: f64 = 0.9;
+/// Finest step 2⁻ᵏ of the grid on which [`Driver::free_motion`] seeks its roots.
+const MODE_GRID: usize = 24;
+/// A block is free (held only by slipping and open contacts) when its motion in the
+/// mechanism step is this many times its motion in the iteration's correction (10⁴ where
+/// it is free, the ratio of the two ε, and 1 elsewhere).
+const MODE_RATIO: f64 = 100.0;
+/// The free motion is taken when the out-of-balance norm after it is below this many
+/// times the norm after the iteration's own step: the norm is not what the motion
+/// lowers (see [`Driver::free_motion`]), and the next iteration, with the contact that
+/// stuck now holding the group, removes what it leaves. On the 60 × 60 wall of
+/// docs/performance.md ("Growth") 3 converges in 58 iterations, 1 (only motions that
+/// lower the norm) in 99.
+const MODE_ACCEPT: f64 = 3.0;
+/// At most this many groups of free blocks move in one iteration (those with the largest
+/// out-of-balance force along their motion).
+const MODE_GROUPS: usize = 8;
+
 /// Keys of `[analysis]` read by this driver.
 pub const KEYS: &[&str] = &[
     "strategy",
@@ -911,6 +935,37 @@ impl<'a> Driver<'a> {
                     }
                 }
             }
+            if singular_streak > 0
+                && self.settings.strategy != Strategy::Initial
+                && best.0 > MODE_PROGRESS * rn
+            {
+                // the step moved little: blocks held only by slipping and open contacts
+                // carry an out-of-balance force that no contact of theirs resists (K_s is
+                // singular there) and the residual's norm does not fall along their free
+                // motion until one of those contacts sticks: search along that motion
+                if let Some(m) = self.blended_step(&trial, &r, MODE_BLEND)? {
+                    if let Some(moves) =
+                        self.free_motion(&best.2, &best.1.state, &m, &delta, f_ext, presc)
+                    {
+                        let mut cand = best.2.clone();
+                        for (i, v) in moves.into_iter().flatten() {
+                            cand[i] += v;
+                        }
+                        let t = self.trial(&cand, presc);
+                        let rn2 = Self::norm(&self.out_of_balance(f_ext, &t.f_int));
+                        if super::tracing() {
+                            eprintln!(
+                                "  free motion: norm {:.3e} -> {:.3e}",
+                                best.0 / scale,
+                                rn2 / scale
+                            );
+                        }
+                        if rn2 < MODE_ACCEPT * best.0 {
+                            best = (rn2, t, cand);
+                        }
+                    }
+                }
+            }
             let (_, t, cand) = best;
             trial = t;
             dq = cand;
@@ -986,6 +1041,152 @@ impl<'a> Driver<'a> {
             alpha *= 0.5;
         }
         best.expect("at least one step is tried")
+    }
+
+    /// The unknowns of each block (m, rad): a rigid block's three, a deformable block's
+    /// nodes' two each, none for a fixed block.
+    fn block_dofs(&self) -> Vec<Vec<usize>> {
+        self.cur
+            .blocks
+            .iter()
+            .map(|b| match b.dofs {
+                crate::mesh::BlockDofs::Rigid { first, .. } => {
+                    (first as usize..first as usize + 3).collect()
+                }
+                crate::mesh::BlockDofs::Deformable => b
+                    .nodes
+                    .clone()
+                    .flat_map(|n| self.cur.node_dofs[n as usize])
+                    .filter(|&d| d != dfem_kernels::CONSTRAINED)
+                    .map(|d| d as usize)
+                    .collect(),
+                crate::mesh::BlockDofs::Fixed => Vec::new(),
+            })
+            .collect()
+    }
+
+    /// The free motion of the blocks that only slipping and open contacts hold, and the
+    /// distance each group of them must travel for one of its contacts to stick.
+    ///
+    /// `m` = (K_s + ε K₀)⁻¹ r with ε = [`MODE_BLEND`] and `step` the correction of the
+    /// iteration, (K_s + 10⁻² K₀)⁻¹ r: where K_s is regular the two agree, where it is
+    /// singular (a block whose contacts all slip or are open, in the direction they slip)
+    /// `m` is 10⁴ times larger. Those blocks, grouped by their closed contacts, each move
+    /// along their part of `m` to the root of their slope s_g(α) = Σ_{i ∈ g} rᵢ(α) mᵢ, where
+    /// r(α) is the out-of-balance force at `from` + α m (an energy line search: with the
+    /// normal forces frozen the contact laws derive from a convex potential and s_g is
+    /// minus its derivative along the group's motion). Along that motion the slope stays
+    /// at the group's out-of-balance force until one of its contacts sticks or reverses,
+    /// while the norm of r stays flat: the norm cannot find the distance, the slope's root
+    /// can. The roots are found on the grid α = 2⁻ᵏ, k = 0 … [`MODE_GRID`], interpolated
+    /// linearly. Returns each group's motion α_g m as (unknown, increment) pairs, or `None`
+    /// when no block is free or no group finds a root.
+    #[allow(clippy::too_many_arguments)]
+    fn free_motion(
+        &self,
+        from: &[f64],
+        from_state: &[ContactState],
+        m: &[f64],
+        step: &[f64],
+        f_ext: &[f64],
+        presc: &[Point],
+    ) -> Option<Vec<Vec<(usize, f64)>>> {
+        let dofs = self.block_dofs();
+        let amax = |v: &[f64], d: &[usize]| d.iter().fold(0.0f64, |a, &i| a.max(v[i].abs()));
+        let free: Vec<bool> = dofs
+            .iter()
+            .map(|d| !d.is_empty() && amax(m, d) > MODE_RATIO * amax(step, d))
+            .collect();
+        if !free.contains(&true) {
+            return None;
+        }
+        // groups: free blocks joined by closed contacts
+        let nb = dofs.len();
+        let mut parent: Vec<usize> = (0..nb).collect();
+        fn root(p: &mut [usize], mut i: usize) -> usize {
+            while p[i] != i {
+                p[i] = p[p[i]];
+                i = p[i];
+            }
+            i
+        }
+        for (k, c) in self.cur.contacts.iter().enumerate() {
+            let (l, n) = (c.block_l as usize, c.block_m as usize);
+            if free[l] && free[n] && from_state[k] != ContactState::Open {
+                let (a, b) = (root(&mut parent, l), root(&mut parent, n));
+                parent[a] = b;
+            }
+        }
+        let group: Vec<Option<usize>> = (0..nb)
+            .map(|b| free[b].then(|| root(&mut parent, b)))
+            .collect();
+        let mut mf = vec![0.0; m.len()];
+        for (b, d) in dofs.iter().enumerate() {
+            if free[b] {
+                for &i in d {
+                    mf[i] = m[i];
+                }
+            }
+        }
+        for &(d, _) in &self.pins {
+            mf[d] = 0.0;
+        }
+        let size = self.model_size();
+        let slopes = |r: &[f64]| {
+            let mut s = vec![0.0; nb];
+            for (b, d) in dofs.iter().enumerate() {
+                if let Some(g) = group[b] {
+                    s[g] += d.iter().map(|&i| r[i] * mf[i]).sum::<f64>();
+                }
+            }
+            s
+        };
+        let at = |a: f64| -> Vec<f64> { from.iter().zip(&mf).map(|(x, y)| x + a * y).collect() };
+        let slope_at =
+            |a: f64| slopes(&self.out_of_balance(f_ext, &self.trial(&at(a), presc).f_int));
+        let mmax = mf.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut prev = (0.0, slope_at(0.0));
+        let s0 = prev.1.clone();
+        let mut alpha: Vec<Option<f64>> = vec![None; nb];
+        for k in (0..=MODE_GRID).rev() {
+            let a = 0.5f64.powi(k as i32);
+            if a * mmax > 0.1 * size {
+                break;
+            }
+            let s = slope_at(a);
+            for g in 0..nb {
+                if group[g] == Some(g) && alpha[g].is_none() && prev.1[g] > 0.0 && s[g] <= 0.0 {
+                    let (a0, s0) = (prev.0, prev.1[g]);
+                    alpha[g] = Some(a0 + (a - a0) * s0 / (s0 - s[g]));
+                }
+            }
+            prev = (a, s);
+            if (0..nb).all(|g| group[g] != Some(g) || alpha[g].is_some()) {
+                break;
+            }
+        }
+        // each group's motion, the groups whose out-of-balance force is largest first
+        let mut groups: Vec<usize> = (0..nb).filter(|&g| alpha[g].is_some()).collect();
+        groups.sort_by(|a, b| s0[*b].total_cmp(&s0[*a]));
+        groups.truncate(MODE_GROUPS);
+        let moves: Vec<Vec<(usize, f64)>> = groups
+            .iter()
+            .map(|&g| {
+                let a = alpha[g].unwrap_or(0.0);
+                (0..nb)
+                    .filter(|&b| group[b] == Some(g))
+                    .flat_map(|b| dofs[b].iter().map(|&i| (i, a * mf[i])))
+                    .collect()
+            })
+            .collect();
+        if super::tracing() {
+            let nf = free.iter().filter(|f| **f).count();
+            eprintln!(
+                "  free motion: {nf} free blocks, {} groups with a root",
+                moves.len()
+            );
+        }
+        (!moves.is_empty()).then_some(moves)
     }
 
     fn model_size(&self) -> f64 {

@@ -56,6 +56,9 @@ pub struct Stats {
     /// Increments of the secant strategy that went on with tangent (Newton) steps after
     /// the secant iterations stalled.
     pub tangent_fallbacks: usize,
+    /// Iterations of the static driver that moved groups of blocks held only by slipping
+    /// and open contacts along their free motion (`Driver::free_motion`, docs/theory.md §4).
+    pub free_motions: usize,
     /// Converged time steps of a dynamic run cut because a contact closed by more than
     /// the band thickness within the step (an impact the step could not resolve).
     pub impact_cuts: usize,

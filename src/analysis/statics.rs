@@ -962,6 +962,7 @@ impl<'a> Driver<'a> {
                         }
                         if rn2 < MODE_ACCEPT * best.0 {
                             best = (rn2, t, cand);
+                            self.stats.free_motions += 1;
                         }
                     }
                 }

@@ -195,6 +195,9 @@ const MODE_BLEND: f64 = 1e-6;
 /// A singular iteration whose line search keeps more than this fraction of the
 /// out-of-balance norm is followed by a [`Driver::free_motion`].
 const MODE_PROGRESS: f64 = 0.9;
+/// Consecutive singular iterations after which a slow one is followed by a
+/// [`Driver::free_motion`].
+const MODE_STREAK: usize = 8;
 /// Finest step 2⁻ᵏ of the grid on which [`Driver::free_motion`] seeks its roots.
 const MODE_GRID: usize = 24;
 /// A block is free (held only by slipping and open contacts) when its motion in the
@@ -935,7 +938,7 @@ impl<'a> Driver<'a> {
                     }
                 }
             }
-            if singular_streak > 0
+            if singular_streak >= MODE_STREAK
                 && self.settings.strategy != Strategy::Initial
                 && best.0 > MODE_PROGRESS * rn
             {

@@ -80,11 +80,7 @@ pub fn solve_with_factor(
         }
         if dot(&res, &res).sqrt() <= tolerance * bnorm {
             // confirm with the true residual (the recurrence drifts in round-off)
-            let true_res = residual_norm(k, &x, r, &mut kp);
-            if true_res <= 10.0 * tolerance * bnorm && x.iter().all(|v| v.is_finite()) {
-                return Some(Reused { x, iterations: it });
-            }
-            return None;
+            return confirmed(k, x, r, 10.0 * tolerance * bnorm, &mut kp, it);
         }
         z.copy_from_slice(&res);
         backend.solve(&mut z).ok()?;
@@ -96,6 +92,22 @@ pub fn solve_with_factor(
         }
     }
     None
+}
+
+/// `x` after `iterations` iterations of [`solve_with_factor`] or [`gmres_with_factor`]
+/// when its true residual ‖r − K x‖₂ is within `limit` (the callers give 10 × the
+/// tolerance their own estimate met: the factor allows for its round-off drift) and it is
+/// finite; `None` otherwise. `scratch`: a work vector of the size of `r`.
+fn confirmed(
+    k: &CsrMatrix,
+    x: Vec<f64>,
+    r: &[f64],
+    limit: f64,
+    scratch: &mut [f64],
+    iterations: usize,
+) -> Option<Reused> {
+    let ok = residual_norm(k, &x, r, scratch) <= limit && x.iter().all(|v| v.is_finite());
+    ok.then_some(Reused { x, iterations })
 }
 
 /// Serial dot product (a fixed order: the same bits for any number of threads), for the
@@ -181,9 +193,7 @@ pub fn gmres_with_factor(
                     *a += yl * b;
                 }
             }
-            let true_res = residual_norm(k, &x, r, &mut w);
-            let ok = true_res <= 10.0 * tolerance * beta && x.iter().all(|a| a.is_finite());
-            return ok.then_some(Reused { x, iterations: m });
+            return confirmed(k, x, r, 10.0 * tolerance * beta, &mut w, m);
         }
         v.push(w.iter().map(|a| a / wn).collect());
     }

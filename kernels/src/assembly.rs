@@ -171,6 +171,11 @@ pub struct AssemblyPlan {
     first_in_group: Vec<Vec<u32>>,
     /// dof → elements touching it (ascending), built by the first [`Self::reassemble`].
     adjacency: OnceLock<(Vec<usize>, Vec<u32>)>,
+    /// Where every element's scatter map starts in `map` (`n_elements + 1` offsets), built
+    /// by the first [`Self::general_map`]: the update path looks up maps of elements
+    /// scattered over the plan, which a walk along each one's chunk made cost more than a
+    /// whole assembly on the rigid P2 wall (docs/performance.md).
+    map_start: OnceLock<Vec<usize>>,
 }
 
 /// The value array of the matrix being assembled, shared by the threads of one colour.
@@ -393,6 +398,7 @@ impl AssemblyPlan {
             untouched,
             first_in_group,
             adjacency: OnceLock::new(),
+            map_start: OnceLock::new(),
         }
     }
 
@@ -772,13 +778,11 @@ impl AssemblyPlan {
     /// Element `e`'s scatter positions as a general map (see [`AssemblyPlan`]'s `map`),
     /// into `out`.
     fn general_map(&self, e: usize, out: &mut Vec<u32>) {
-        let c = self.chunk_of_element(e);
-        let s = self.chunk_map[c]
-            + (self.chunk_start[c]..e)
-                .map(|f| map_len(self.conn.slots(f), self.paired[f]))
-                .sum::<usize>();
+        let starts = self.map_start.get_or_init(|| {
+            prefix_sum((0..self.n_elements()).map(|f| map_len(self.conn.slots(f), self.paired[f])))
+        });
         let m = self.conn.slots(e);
-        let map = &self.map[s..s + map_len(m, self.paired[e])];
+        let map = &self.map[starts[e]..starts[e + 1]];
         out.clear();
         if !self.paired[e] {
             out.extend_from_slice(map);

@@ -585,7 +585,11 @@ pub fn contact_map(mesh: &Mesh, c: &Contact) -> ContactMap {
 /// Add the local force [Fₙ, Fₛ] (N) of contact `c` to the global vector `out`:
 /// out += Fₙ gₙ + Fₛ gₛ (the contact's share of F_int, METHOD.md §3).
 pub fn add_contact_force(mesh: &Mesh, c: &Contact, f: [f64; 2], out: &mut [f64]) {
-    let map = contact_map(mesh, c);
+    add_mapped_force(&contact_map(mesh, c), f, out);
+}
+
+/// [`add_contact_force`] with the contact's map computed already.
+pub fn add_mapped_force(map: &ContactMap, f: [f64; 2], out: &mut [f64]) {
     for (&d, g) in map.dofs.iter().zip(&map.g).take(map.len) {
         out[d as usize] += f[0] * g[0] + f[1] * g[1];
     }

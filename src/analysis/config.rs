@@ -213,19 +213,26 @@ pub fn evaluate(
             }
         }
     }
-    // the contacts' shares of F_int (METHOD.md §3: Fₙ gₙ + Fₛ gₛ on each free unknown)
-    // computed in parallel, added serially in contact order: the same sums as adding them
-    // one contact at a time, bit for bit, for any number of threads
-    let shares: Vec<Option<crate::assembly::ContactMap>> = (0..nc)
-        .into_par_iter()
-        .with_min_len(256)
-        .map(|k| {
-            (force[k] != [0.0, 0.0]).then(|| crate::assembly::contact_map(&mesh, &mesh.contacts[k]))
-        })
-        .collect();
-    for (map, f) in shares.iter().zip(&force) {
-        if let Some(map) = map {
-            crate::assembly::add_mapped_force(map, *f, &mut f_int);
+    // the contacts' shares of F_int (METHOD.md §3: Fₙ gₙ + Fₛ gₛ on each free unknown):
+    // their maps computed in parallel, a slice of contacts at a time (a few MB whatever
+    // the model's size), added serially in contact order: the same sums as adding them one
+    // contact at a time, bit for bit, for any number of threads
+    const SLICE: usize = 8192;
+    let mut shares: Vec<Option<crate::assembly::ContactMap>> = Vec::new();
+    for start in (0..nc).step_by(SLICE) {
+        let end = (start + SLICE).min(nc);
+        (start..end)
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|k| {
+                (force[k] != [0.0, 0.0])
+                    .then(|| crate::assembly::contact_map(&mesh, &mesh.contacts[k]))
+            })
+            .collect_into_vec(&mut shares);
+        for (map, f) in shares.iter().zip(&force[start..end]) {
+            if let Some(map) = map {
+                crate::assembly::add_mapped_force(map, *f, &mut f_int);
+            }
         }
     }
     Trial {

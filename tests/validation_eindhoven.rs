@@ -51,6 +51,17 @@
 //!   papers (Lourenço and Rots 1997's abstract: the model "is capable of predicting the
 //!   experimental collapse load and behaviour accurately", no number). No experimental
 //!   number is verified.
+//! * a third search on 26 November 2026 (02:15–02:25 UTC): the stored pages for
+//!   "Vermeltfoort Raijmakers shear wall J4D peak load kN", "masonry shear wall 990 x 1000
+//!   mm micro-modelling interface Lourenço Rots validation load displacement Eindhoven" and
+//!   "Lourenço user programmer guide micro-modeling masonry shear wall example dilatancy";
+//!   the code for "J4D J5D J6D J7D shear walls pre-compression 0.30 1.21 2.12";
+//!   the issues for "Eindhoven shear wall micro-model validation peak load comparison";
+//!   the documentation for "DIANA tutorial masonry shear wall …"; the exact string
+//!   "Vermeltfoort". New: the opening page of Lourenço's "A user/programmer guide for
+//!   the micro-modeling of masonry structures" (TU Delft report 03.21.1.31.35, November
+//!   1996, on documents.pub), which announces "comprehensive examples" but whose examples
+//!   the tool does not reach. No experimental number is verified.
 //!
 //! The fast test runs J4D with the bricks meshed at 0.052 m (half a brick's height, where
 //! the shipped examples mesh them at 0.026 m: a run to the peak at 0.026 m takes minutes)

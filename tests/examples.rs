@@ -2,9 +2,10 @@
 //! non-overlapping polygons), has contacts wherever blocks should touch (every free block
 //! touches another block), runs to its end and writes its results.
 //!
-//! The Eindhoven walls (`eindhoven*`, 20–50 s each to their 4 mm push) run here with the
-//! push shortened to its first 0.4 mm in 4 increments, still by arc length: their whole
-//! paths are the ignored sweep of tests/validation_eindhoven.rs (docs/performance.md).
+//! The Eindhoven walls (`eindhoven*`, bricks meshed at 26 mm, 1–3 minutes each along
+//! their push) run here with the push shortened to its first 0.4 mm in 4 increments,
+//! still by their dissipation-based arc length: their whole paths are the ignored sweeps
+//! of tests/validation_eindhoven.rs (docs/performance.md).
 
 mod common;
 use std::process::Command;

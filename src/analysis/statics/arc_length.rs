@@ -205,26 +205,79 @@ impl Driver<'_> {
             .sum()
     }
 
-    /// `DFEM_TRACE`: the contact that spends the most energy in the increment to `trial`
-    /// (Eq. A2), with its increments of ξ and κ₃ and its node (m).
+    /// `DFEM_TRACE`: how many contacts spend energy in the increment to `trial` (Eq. A2)
+    /// and the four that spend the most, with their increments of ξ and κ₃, of relative
+    /// displacement (Δδₙ, Δδₛ) (m), their forces (N) and nodes (m).
     fn trace_spending(&self, trial: &Trial) {
-        let mut worst = (0, 0.0, [0.0; 2]);
+        let mut spent: Vec<(usize, f64)> = Vec::new();
         for k in 0..self.area.len() {
             if let crate::material::JointLaw::Softening(m) = self.law.get(k) {
                 let h0 = self.committed.history.get(k).copied().unwrap_or([0.0; 2]);
                 let h1 = trial.history.get(k).copied().unwrap_or([0.0; 2]);
                 let w = m.softening_work(self.area[k], h0, h1, trial.state[k]);
-                if w > worst.1 {
-                    worst = (k, w, [h1[0] - h0[0], h1[1] - h0[1]]);
+                if w > 0.0 {
+                    spent.push((k, w));
                 }
             }
         }
-        let (k, w, dh) = worst;
-        if let Some(c) = self.cur.contacts.get(k) {
-            eprintln!(
-                "arc spending: contact {k} at {:?} spends {w:.3e} J (Δξ {:.2e}, Δκ₃ {:.2e} m, {:?}), force {:?}",
-                self.cur.nodes[c.node_m as usize], dh[0], dh[1], trial.state[k], trial.force[k]
-            );
+        let total: f64 = spent.iter().map(|s| s.1).sum();
+        spent.sort_by(|a, b| b.1.total_cmp(&a.1));
+        // the work done on the contacts less the change of their elastic energy: what
+        // they dissipate in all, friction included (J)
+        let mut plastic = 0.0;
+        for k in 0..self.area.len().min(trial.rel.len()) {
+            let sp = self.law.get(k).springs(self.area[k]);
+            let f0 = self.committed.force.get(k).copied().unwrap_or([0.0; 2]);
+            let f1 = trial.force[k];
+            let d = trial.rel[k];
+            for (i, kk) in [sp.kn, sp.ks].into_iter().enumerate() {
+                plastic +=
+                    0.5 * (f0[i] + f1[i]) * d[i] - (f1[i] * f1[i] - f0[i] * f0[i]) / (2.0 * kk);
+            }
+        }
+        // where: the joints of the lowest and the highest contact rows (a base and a
+        // loading beam), the strong joints (brick cracks: fₜ > 1 MPa) and the rest (J)
+        let (lo, hi) = self
+            .cur
+            .contacts
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), c| {
+                let y = self.cur.nodes[c.node_m as usize][1];
+                (a.min(y), b.max(y))
+            });
+        let mut by = [0.0; 4];
+        for &(k, w) in &spent {
+            let y = self.cur.nodes[self.cur.contacts[k].node_m as usize][1];
+            let strong = matches!(self.law.get(k), crate::material::JointLaw::Softening(m) if m.tensile_strength > 1e6);
+            let i = if (y - lo).abs() < 1e-3 {
+                0
+            } else if (y - hi).abs() < 1e-3 {
+                1
+            } else if strong {
+                2
+            } else {
+                3
+            };
+            by[i] += w;
+        }
+        eprintln!(
+            "arc spending: {} contacts spend {total:.3e} J (lowest row {:.2e}, highest row {:.2e}, strong joints {:.2e}, the rest {:.2e}); all the contacts dissipate {plastic:.3e} J",
+            spent.len(), by[0], by[1], by[2], by[3]
+        );
+        for &(k, w) in spent.iter().take(4) {
+            let h0 = self.committed.history.get(k).copied().unwrap_or([0.0; 2]);
+            let h1 = trial.history.get(k).copied().unwrap_or([0.0; 2]);
+            if let Some(c) = self.cur.contacts.get(k) {
+                eprintln!(
+                    "  contact {k} at {:?} spends {w:.3e} J (Δξ {:.2e}, Δκ₃ {:.2e} m, {:?}), force {:?}, Δδ {:?}",
+                    self.cur.nodes[c.node_m as usize],
+                    h1[0] - h0[0],
+                    h1[1] - h0[1],
+                    trial.state[k],
+                    trial.force[k],
+                    trial.rel.get(k)
+                );
+            }
         }
     }
 

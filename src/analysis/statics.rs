@@ -938,7 +938,7 @@ impl<'a> Driver<'a> {
                 }
             };
             // line search on the out-of-balance norm
-            let mut best = self.line_search(&dq, &delta, rn, f_ext, presc);
+            let mut best = self.line_search(&dq, &delta, rn, f_ext, presc, LINE_SEARCH_STEPS);
             if super::tracing() {
                 eprintln!(
                     "  step tangent {tangent} singular {singular_streak} ratio {:.3}",
@@ -963,7 +963,7 @@ impl<'a> Driver<'a> {
                     self.blended_step(&trial, &r, BLEND)?
                 };
                 if let Some(x) = x {
-                    let alt = self.line_search(&dq, &x, rn, f_ext, presc);
+                    let alt = self.line_search(&dq, &x, rn, f_ext, presc, LINE_SEARCH_STEPS);
                     if alt.0 < best.0 {
                         best = alt;
                     }
@@ -983,7 +983,7 @@ impl<'a> Driver<'a> {
                     // the tangent of the current states is the Jacobian where no contact
                     // sits at a kink of its law, so a short enough step along it lowers
                     // the norm: backtrack further than for the secant step
-                    let alt = self.line_search_to(&dq, &x, rn, f_ext, presc, SAFEGUARD_STEPS);
+                    let alt = self.line_search(&dq, &x, rn, f_ext, presc, SAFEGUARD_STEPS);
                     if super::tracing() {
                         eprintln!("  safeguard tangent ratio {:.3}", alt.0 / rn);
                     }
@@ -1074,21 +1074,10 @@ impl<'a> Driver<'a> {
         }
     }
 
-    /// Backtracking on the out-of-balance norm along `delta` from `dq`: the best of the
-    /// tried steps (norm, trial, increment).
+    /// Backtracking on the out-of-balance norm along `delta` from `dq` over the step
+    /// lengths 1, ½, … 2^(1 − `steps`): the best of the tried steps (norm, trial,
+    /// increment).
     fn line_search(
-        &self,
-        dq: &[f64],
-        delta: &[f64],
-        rn: f64,
-        f_ext: &[f64],
-        presc: &[Point],
-    ) -> (f64, Trial, Vec<f64>) {
-        self.line_search_to(dq, delta, rn, f_ext, presc, LINE_SEARCH_STEPS)
-    }
-
-    /// [`Driver::line_search`] over the step lengths 1, ½, … 2^(1 − `steps`).
-    fn line_search_to(
         &self,
         dq: &[f64],
         delta: &[f64],

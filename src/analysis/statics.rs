@@ -1707,8 +1707,11 @@ pub fn run_with_progress<'a>(
                 if narrow || step <= 1e-12 * d.settings.initial_step || lambda > limit {
                     break;
                 }
-                let target = if upper.is_finite() {
-                    (lambda + step).min(upper)
+                // a step that ends within round-off of the upper bound retries that bound
+                // itself: converging a hair below it would leave it standing as a bound
+                // that only a failure from a distant state set (a zero-width bracket)
+                let target = if lambda + step >= upper * (1.0 - 1e-12) {
+                    upper
                 } else {
                     lambda + step
                 };

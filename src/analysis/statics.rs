@@ -349,6 +349,11 @@ const REUSE_TOLERANCE: f64 = 1e-10;
 /// open and slip in waves, still gain 10 % within 60 iterations (the 30×30 wall of
 /// docs/performance.md: its slowest increment improves by that in at most 25).
 const STALL_ITERATIONS: usize = 60;
+/// Step lengths 1, ½, ¼, ⅛ of the line search on the out-of-balance norm.
+const LINE_SEARCH_STEPS: usize = 4;
+/// Step lengths 1 … 2⁻¹¹ of the line search along the tangent step that replaces a secant
+/// step which does not lower the out-of-balance norm.
+const SAFEGUARD_STEPS: usize = 12;
 /// Fraction of the best residual an iteration must reach to count as progress.
 const STALL_PROGRESS: f64 = 0.9;
 
@@ -825,16 +830,35 @@ impl<'a> Driver<'a> {
             // round-off
             let negligible = self.settings.tolerance * scale;
             self.converged_norm = negligible;
+            let matters = |k: usize| {
+                trial.force[k][0].hypot(trial.force[k][1]) > negligible
+                    || prev_force[k][0].hypot(prev_force[k][1]) > negligible
+            };
             let changed = trial
                 .state
                 .iter()
                 .zip(&prev_state)
                 .enumerate()
-                .any(|(k, (a, b))| {
-                    a != b
-                        && (trial.force[k][0].hypot(trial.force[k][1]) > negligible
-                            || prev_force[k][0].hypot(prev_force[k][1]) > negligible)
-                });
+                .any(|(k, (a, b))| a != b && matters(k));
+            if super::tracing() {
+                // changes of state of the contacts that carry a force: stick→slip,
+                // slip→stick, closed→open, open→closed
+                let mut tr = [0usize; 4];
+                for (k, (a, b)) in trial.state.iter().zip(&prev_state).enumerate() {
+                    if a != b && matters(k) {
+                        tr[match (b, a) {
+                            (ContactState::Stick, ContactState::Slip) => 0,
+                            (ContactState::Slip, ContactState::Stick) => 1,
+                            (_, ContactState::Open) => 2,
+                            _ => 3,
+                        }] += 1;
+                    }
+                }
+                eprintln!(
+                    "  changes stick>slip {} slip>stick {} >open {} open> {}",
+                    tr[0], tr[1], tr[2], tr[3]
+                );
+            }
             if (it > 0 || extrapolated) && rn <= self.settings.tolerance * scale && !changed {
                 self.report.iterations = it;
                 self.report.residual = rn / scale;
@@ -914,7 +938,13 @@ impl<'a> Driver<'a> {
                 }
             };
             // line search on the out-of-balance norm
-            let mut best = self.line_search(&dq, &delta, rn, f_ext, presc);
+            let mut best = self.line_search(&dq, &delta, rn, f_ext, presc, LINE_SEARCH_STEPS);
+            if super::tracing() {
+                eprintln!(
+                    "  step tangent {tangent} singular {singular_streak} ratio {:.3}",
+                    best.0 / rn
+                );
+            }
             if tangent && best.0 >= rn {
                 // safeguarded Newton: where the tangent step does not reduce the
                 // out-of-balance force (slip/open cycling at a lightly loaded contact),
@@ -933,7 +963,30 @@ impl<'a> Driver<'a> {
                     self.blended_step(&trial, &r, BLEND)?
                 };
                 if let Some(x) = x {
-                    let alt = self.line_search(&dq, &x, rn, f_ext, presc);
+                    let alt = self.line_search(&dq, &x, rn, f_ext, presc, LINE_SEARCH_STEPS);
+                    if alt.0 < best.0 {
+                        best = alt;
+                    }
+                }
+            } else if self.settings.strategy == Strategy::Secant
+                && singular_streak == 0
+                && best.0 >= rn
+            {
+                // safeguarded secant: a regular secant step that no step length makes
+                // reduce the out-of-balance force is not a descent direction (with many
+                // contacts slipping K_s is far from the Jacobian, which couples the
+                // friction to the normal force); take the tangent step where it does
+                if let Some(x) = self
+                    .correction(&trial, &states, &r, true)?
+                    .filter(|d| d.iter().all(|v| v.abs() <= 0.5 * size))
+                {
+                    // the tangent of the current states is the Jacobian where no contact
+                    // sits at a kink of its law, so a short enough step along it lowers
+                    // the norm: backtrack further than for the secant step
+                    let alt = self.line_search(&dq, &x, rn, f_ext, presc, SAFEGUARD_STEPS);
+                    if super::tracing() {
+                        eprintln!("  safeguard tangent ratio {:.3}", alt.0 / rn);
+                    }
                     if alt.0 < best.0 {
                         best = alt;
                     }
@@ -1021,8 +1074,9 @@ impl<'a> Driver<'a> {
         }
     }
 
-    /// Backtracking on the out-of-balance norm along `delta` from `dq`: the best of the
-    /// tried steps (norm, trial, increment).
+    /// Backtracking on the out-of-balance norm along `delta` from `dq` over the step
+    /// lengths 1, ½, … 2^(1 − `steps`): the best of the tried steps (norm, trial,
+    /// increment).
     fn line_search(
         &self,
         dq: &[f64],
@@ -1030,10 +1084,11 @@ impl<'a> Driver<'a> {
         rn: f64,
         f_ext: &[f64],
         presc: &[Point],
+        steps: usize,
     ) -> (f64, Trial, Vec<f64>) {
         let mut alpha = 1.0;
         let mut best: Option<(f64, Trial, Vec<f64>)> = None;
-        for _ in 0..if self.settings.line_search { 4 } else { 1 } {
+        for _ in 0..if self.settings.line_search { steps } else { 1 } {
             let cand: Vec<f64> = dq.iter().zip(delta).map(|(a, b)| a + alpha * b).collect();
             let t = self.trial(&cand, presc);
             let rn2 = Self::norm(&self.out_of_balance(f_ext, &t.f_int));
@@ -1652,8 +1707,11 @@ pub fn run_with_progress<'a>(
                 if narrow || step <= 1e-12 * d.settings.initial_step || lambda > limit {
                     break;
                 }
-                let target = if upper.is_finite() {
-                    (lambda + step).min(upper)
+                // a step that ends within round-off of the upper bound retries that bound
+                // itself: converging a hair below it would leave it standing as a bound
+                // that only a failure from a distant state set (a zero-width bracket)
+                let target = if lambda + step >= upper * (1.0 - 1e-12) {
+                    upper
                 } else {
                     lambda + step
                 };
@@ -1665,6 +1723,9 @@ pub fn run_with_progress<'a>(
                 let guess = last
                     .as_ref()
                     .map(|(step, dq)| dq.iter().map(|x| x * (target - lambda) / step).collect());
+                if super::tracing() {
+                    eprintln!("capacity increment {lambda:.6} -> {target:.6} (upper {upper:.6})");
+                }
                 match d.increment(&f, &zero_presc, guess)? {
                     Ok(trial) => {
                         let dq = trial.dq.clone();

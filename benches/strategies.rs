@@ -5,7 +5,8 @@
 //!     cargo bench --bench strategies -- [--quick] [--limit SECONDS] [--sizes 10,30,100]
 //!                                        [--strategies initial,secant,newton]
 //!                                        [--tolerances 1e-4,1e-6] [--brackets 1e-2,1e-3,1e-4]
-//!                                        [--reference 1e-8,1e-5]
+//!                                        [--reference 1e-8,1e-5] [--reference-strategy secant]
+//!                                        [--jobs 1] [--threads N]
 //!                                        [--csv FILE] [--plot DIR]
 //!
 //! `--quick` runs the small walls only (10 × 10 and 30 × 30 blocks); the default adds the
@@ -13,7 +14,10 @@
 //! (strategy secant, tolerance 1e-8, bracket 1e-5); the error of a run is
 //! |λ − λ_ref| / λ_ref. Every analysis runs in a child process (this binary with `--case`)
 //! so that a run longer than `--limit` seconds (default 600) is stopped and reported as
-//! such rather than holding up the table. The wall time is the driver's own
+//! such rather than holding up the table. `--jobs N` runs N children at a time (the
+//! reference is started first) and `--threads N` sets each child's RAYON_NUM_THREADS: on a
+//! 2-core machine `--jobs 2 --threads 1` gives each run a core of its own (the results do
+//! not depend on the number of threads; the factorizations are sequential anyway). The wall time is the driver's own
 //! (`Outcome.stats.wall_time_s`: the analysis, without parsing and meshing).
 //! Results are printed as a markdown table on stdout; progress goes to stderr. `--csv FILE`
 //! also saves the table as CSV, and `--plot DIR` draws the wall time against the error, one
@@ -171,9 +175,15 @@ fn measure(
     tolerance: f64,
     bracket: f64,
     limit: Duration,
+    threads: Option<usize>,
 ) -> Run {
     let exe = std::env::current_exe().expect("path of the bench binary");
-    let mut child = Command::new(exe)
+    let mut command = Command::new(exe);
+    if let Some(t) = threads {
+        // results do not depend on the number of threads; only the wall time does
+        command.env("RAYON_NUM_THREADS", t.to_string());
+    }
+    let mut child = command
         .args([
             "--case",
             &courses.to_string(),
@@ -273,6 +283,9 @@ fn main() {
             .collect()
     };
     let (mut ref_tolerance, mut ref_bracket) = (REF_TOLERANCE, REF_BRACKET);
+    let mut ref_strategy = REF_STRATEGY.to_string();
+    let mut jobs = 1usize;
+    let mut threads: Option<usize> = None;
     let (mut csv, mut plot): (Option<String>, Option<String>) = (None, None);
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -301,6 +314,27 @@ fn main() {
                 assert_eq!(r.len(), 2, "--reference TOLERANCE,BRACKET");
                 (ref_tolerance, ref_bracket) = (r[0], r[1]);
             }
+            "--reference-strategy" => {
+                ref_strategy = it
+                    .next()
+                    .expect("--reference-strategy initial|secant|newton")
+                    .clone()
+            }
+            "--jobs" => {
+                jobs = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .filter(|&j| j >= 1)
+                    .expect("--jobs N (N >= 1)")
+            }
+            "--threads" => {
+                threads = Some(
+                    it.next()
+                        .and_then(|v| v.parse().ok())
+                        .filter(|&t| t >= 1)
+                        .expect("--threads N (N >= 1)"),
+                )
+            }
             "--brackets" => brackets = list(it.next(), "--brackets"),
             "--csv" => csv = Some(it.next().expect("--csv FILE").clone()),
             "--plot" => plot = Some(it.next().expect("--plot DIR").clone()),
@@ -325,11 +359,12 @@ fn main() {
         "Capacity of rigid running-bond walls (n courses x n bricks of 0.4 m x 0.2 m, friction 31 deg, no cohesion), backend faer-cholesky."
     );
     println!(
-        "Reference lambda_ref of each wall: the tightest run (strategy {REF_STRATEGY}, tolerance {ref_tolerance:e}, bracket {ref_bracket:e}); error = |lambda - lambda_ref| / lambda_ref."
+        "Reference lambda_ref of each wall: the tightest run (strategy {ref_strategy}, tolerance {ref_tolerance:e}, bracket {ref_bracket:e}); error = |lambda - lambda_ref| / lambda_ref."
     );
     println!(
-        "Each run is stopped after {:.0} s; wall time is the analysis only (no parsing/meshing).\n",
-        limit.as_secs_f64()
+        "Each run is stopped after {:.0} s; wall time is the analysis only (no parsing/meshing); {jobs} run(s) at a time, {} thread(s) each.\n",
+        limit.as_secs_f64(),
+        threads.map_or("the default number of".to_string(), |t| t.to_string())
     );
     let mut table = Table::new(&STRATEGY_COLUMNS);
     print!(
@@ -338,20 +373,24 @@ fn main() {
     );
     let mut notes = Vec::new();
     for &n in &sizes {
-        eprintln!("wall {n} x {n}: reference run ({REF_STRATEGY}, tol {ref_tolerance:e}, bracket {ref_bracket:e})");
-        let reference = measure(n, n, REF_STRATEGY, ref_tolerance, ref_bracket, limit);
-        let lref = reference.lambda;
-        let mut runs = vec![(reference, true)];
-        table.rows.push(print_row(&runs[0].0, lref, true));
+        // the reference first, then the grid; `jobs` child processes at a time
+        let mut cases = vec![(ref_strategy.clone(), ref_tolerance, ref_bracket)];
         for s in &strategies {
             for &tol in &tolerances {
                 for &br in &brackets {
-                    eprintln!("wall {n} x {n}: {s}, tol {tol:e}, bracket {br:e}");
-                    let r = measure(n, n, s, tol, br, limit);
-                    table.rows.push(print_row(&r, lref, false));
-                    runs.push((r, false));
+                    cases.push((s.clone(), tol, br));
                 }
             }
+        }
+        let done = run_cases(n, &cases, limit, jobs, threads);
+        let lref = done[0].lambda;
+        let runs: Vec<(Run, bool)> = done
+            .into_iter()
+            .enumerate()
+            .map(|(i, r)| (r, i == 0))
+            .collect();
+        for (r, is_ref) in &runs {
+            table.rows.push(print_row(r, lref, *is_ref));
         }
         for (r, is_ref) in &runs {
             let ok = r.message.starts_with("critical load factor");
@@ -404,6 +443,45 @@ fn main() {
             eprintln!("figure written: {}", f.display());
         }
     }
+}
+
+/// Run the `cases` (strategy, tolerance, bracket) of the n × n wall, `jobs` child processes
+/// at a time, and return their results in the order of `cases`.
+fn run_cases(
+    n: usize,
+    cases: &[(String, f64, f64)],
+    limit: Duration,
+    jobs: usize,
+    threads: Option<usize>,
+) -> Vec<Run> {
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results: Vec<std::sync::Mutex<Option<Run>>> =
+        cases.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.min(cases.len()) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                let Some((s, tol, br)) = cases.get(i) else {
+                    break;
+                };
+                eprintln!("wall {n} x {n}: {s}, tol {tol:e}, bracket {br:e}: started");
+                let r = measure(n, n, s, *tol, *br, limit, threads);
+                eprintln!(
+                    "wall {n} x {n}: {s}, tol {tol:e}, bracket {br:e}: {:.1} s, {}",
+                    r.wall_s, r.message
+                );
+                *results[i].lock().expect("a result slot") = Some(r);
+            });
+        }
+    });
+    results
+        .into_iter()
+        .map(|m| {
+            m.into_inner()
+                .expect("a result slot")
+                .expect("every case was run")
+        })
+        .collect()
 }
 
 /// Print the row of a run (markdown, as it comes) and return its cells.

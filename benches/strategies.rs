@@ -116,6 +116,9 @@ struct Run {
     iterations: usize,
     factorizations: usize,
     wall_s: f64,
+    /// CPU time of the child process (user + system, s; `None` where /proc is missing): on
+    /// a loaded machine the wall time grows with the load, the CPU time much less.
+    cpu_s: Option<f64>,
     /// The summary's message (status reason), or why there is no result.
     message: String,
 }
@@ -150,21 +153,34 @@ fn run_case(courses: usize, bricks: usize, strategy: &str, tolerance: f64, brack
                 outer
             };
             println!(
-                "RESULT\t{blocks}\t{}\t{lambda}\t{}\t{}\t{wall}\t{}",
+                "RESULT\t{blocks}\t{}\t{lambda}\t{}\t{}\t{wall}\t{}\t{}",
                 mesh.n_dofs,
                 out.stats.iterations,
                 out.stats.factorizations,
+                cpu_seconds().map_or("none".to_string(), |c| c.to_string()),
                 message.replace(['\t', '\n'], " ")
             );
         }
         Err(e) => {
             println!(
-                "RESULT\t{blocks}\t{}\tnone\t0\t0\t{outer}\terror: {}",
+                "RESULT\t{blocks}\t{}\tnone\t0\t0\t{outer}\tnone\terror: {}",
                 mesh.n_dofs,
                 e.to_string().replace(['\t', '\n'], " ")
             );
         }
     }
+}
+
+/// CPU time of this process so far (user + system, s), from /proc/self/stat (Linux;
+/// `None` elsewhere). The clock tick is taken as 1/100 s, the value on Linux.
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // the fields after the command name, which is in parentheses and may hold spaces
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // utime and stime are fields 14 and 15 of the line, 12 and 13 after the name
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
 }
 
 /// Parent mode: run one case in a child process, stopped after `limit`.
@@ -226,17 +242,19 @@ fn measure(
         iterations: 0,
         factorizations: 0,
         wall_s: elapsed,
+        cpu_s: None,
         message: String::new(),
     };
     if let Some(line) = stdout.lines().find(|l| l.starts_with("RESULT\t")) {
-        let f: Vec<&str> = line.splitn(9, '\t').collect();
+        let f: Vec<&str> = line.splitn(10, '\t').collect();
         run.blocks = f[1].parse().unwrap_or(0);
         run.dofs = f[2].parse().unwrap_or(0);
         run.lambda = f[3].parse().ok();
         run.iterations = f[4].parse().unwrap_or(0);
         run.factorizations = f[5].parse().unwrap_or(0);
         run.wall_s = f[6].parse().unwrap_or(elapsed);
-        run.message = f.get(7).unwrap_or(&"").to_string();
+        run.cpu_s = f.get(7).and_then(|c| c.parse().ok());
+        run.message = f.get(8).unwrap_or(&"").to_string();
     } else if timed_out {
         run.message = format!("stopped after {:.0} s (limit)", limit.as_secs_f64());
     } else {
@@ -467,8 +485,10 @@ fn run_cases(
                 eprintln!("wall {n} x {n}: {s}, tol {tol:e}, bracket {br:e}: started");
                 let r = measure(n, n, s, *tol, *br, limit, threads);
                 eprintln!(
-                    "wall {n} x {n}: {s}, tol {tol:e}, bracket {br:e}: {:.1} s, {}",
-                    r.wall_s, r.message
+                    "wall {n} x {n}: {s}, tol {tol:e}, bracket {br:e}: {:.1} s wall, {} s CPU, {}",
+                    r.wall_s,
+                    r.cpu_s.map_or("?".to_string(), |c| format!("{c:.1}")),
+                    r.message
                 );
                 *results[i].lock().expect("a result slot") = Some(r);
             });

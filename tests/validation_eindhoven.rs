@@ -533,7 +533,10 @@ fn figure() {
 // at the higher pre-compressions. Measured (docs/performance.md): J4D x–y correlation of
 // the open contacts −0.85, 5 brick cracks open, 5 and 6 toe contacts past the cap's first
 // yield, bed joints to the base and the beam 12 % and 14 % open; J6D −0.48, 16, 21 and
-// 23, 1 % and 1 %; J7D −0.33, 6, 21 and 22, 18 % and 18 %.
+// 23, 1 % and 1 %; J7D −0.33, 6, 21 and 22, 18 % and 18 %. (J4D's figures are those of
+// the run that ended at the foot of its snap-back; since the push goes on from there
+// (docs/performance.md, "Constraint switching and the reload past the snap-back") J4D
+// ends further on, and its sweep's pattern thresholds have not been rechecked.)
 
 /// Contacts at a toe past the cap's first yield (σ² + C_ss τ² ≥ (fₘ/3)²) from which
 /// the toe counts as crushing: 10, twice J4D's 5–6 and half J6D's and J7D's 21–23.

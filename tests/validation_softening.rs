@@ -396,6 +396,17 @@ fn dissipation_arc_length_follows_the_snap_back_and_dissipates_gf1() {
     assert_eq!(out.status, Status::Stable, "{:?}", out.status);
     let pts = curve(&out);
     let (_, _, k2s) = check_snap_back("dissipation", &pts);
+    // how the pull was followed (summary.json's curve.path): to its end, one increment
+    // per point of the curve after the first, some of them on the dissipation (Eq. A2)
+    let path = out.capacity_curve.as_ref().unwrap().path.clone().unwrap();
+    assert_eq!(path.end, "the end of the push");
+    assert!((path.reached - 1.0).abs() < 1e-9, "{path:?}");
+    assert_eq!(
+        path.increments.iter().sum::<usize>() + 1,
+        pts.len(),
+        "{path:?}"
+    );
+    assert!(path.increments[1] > 0, "{path:?}");
     let last = *pts.last().unwrap();
     let w = work(pts.iter().map(|p| [p[1], p[3]])) - last[3] * last[3] / (2.0 * k2s);
     let g = GF1 * AREA * (1.0 - last[3] / (FT * AREA));

@@ -26,6 +26,25 @@ pub struct Curve {
     pub control_block: usize,
     /// From the state after gravity (λ = 0) to the last converged increment.
     pub points: Vec<CurvePoint>,
+    /// Displacement control (`[analysis] push_block`): how far the push went and why it
+    /// ended; `None` for a capacity curve.
+    pub path: Option<PushPath>,
+}
+
+/// How a push (`[analysis] push_block`) was followed (summary.json, `curve.path`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PushPath {
+    /// The displacement along the push at the end, as a fraction of `push_displacement`.
+    pub reached: f64,
+    /// The largest displacement along the push on the way (m): past a snap-back the
+    /// path comes back from it.
+    pub furthest: f64,
+    /// The converged increments taken on the cylinder (docs/theory.md Eq. A1), on the
+    /// dissipation (Eq. A2) and under displacement control of the block (Eq. A3, or
+    /// `path = "displacement"`).
+    pub increments: [usize; 3],
+    /// Why the push ended: "the end of the push" or why it stopped short.
+    pub end: String,
 }
 
 /// The top-most free block (highest initial centroid; the first one on ties), if any.

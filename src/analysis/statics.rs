@@ -1620,13 +1620,32 @@ pub fn run_with_progress<'a>(
             record: Some(push.block),
         };
         d.begin_phase("push", Some(steps), 1.0);
-        let (s, why) = match d.settings.arc {
+        let (s, why, increments) = match d.settings.arc {
             Some(arc) => arc_length::run(&mut d, &phase.base, &push, &arc, steps)?,
-            None => d.run_phase(&phase, steps)?,
+            None => {
+                let (s, why) = d.run_phase(&phase, steps)?;
+                (s, why, [0, 0, d.push_curve.len().saturating_sub(1)])
+            }
         };
+        let points = std::mem::take(&mut d.push_curve);
+        let (h, v) = (push.horizontal, push.vertical.unwrap_or(0.0));
+        let len = h.hypot(v).max(1e-300);
+        let furthest = points.iter().fold(0.0f64, |m, p| {
+            let u = [
+                p.displacement[0] - points[0].displacement[0],
+                p.displacement[1] - points[0].displacement[1],
+            ];
+            m.max((u[0] * h + u[1] * v) / len)
+        });
         let curve = super::curve::Curve {
             control_block: push.block,
-            points: std::mem::take(&mut d.push_curve),
+            points,
+            path: Some(super::curve::PushPath {
+                reached: s,
+                furthest,
+                increments,
+                end: why.clone().unwrap_or_else(|| "the end of the push".into()),
+            }),
         };
         let mut out = match why {
             Some(why) => fail(
@@ -1755,6 +1774,7 @@ pub fn run_with_progress<'a>(
             let curve = control.map(|control_block| super::curve::Curve {
                 control_block,
                 points: curve,
+                path: None,
             });
             if lambda > limit {
                 let mut out = finish(&mut d, Status::Stable, Some(lambda), None);

@@ -130,6 +130,16 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
         "curve": out.capacity_curve.as_ref().map(|c| json!({
             "file": "curve.csv",
             "control_block": scene.blocks[c.control_block].name,
+            "path": c.path.as_ref().map(|p| json!({
+                "reached": p.reached,
+                "furthest_m": p.furthest,
+                "increments": {
+                    "cylinder": p.increments[0],
+                    "dissipation": p.increments[1],
+                    "displacement": p.increments[2],
+                },
+                "end": p.end,
+            })),
         })),
     })
 }

@@ -30,6 +30,10 @@
 //! (J; [`crate::material::Softening::softening_work`], METHOD.md §3 for the law), a local
 //! constraint: only the contacts where a crack grows or a toe crushes take part, where the
 //! cylinder measures all unknowns and lets a local snap-back or an elastic mode pass.
+//! An increment whose dissipation constraint cannot be met falls back to displacement
+//! control of the pushed block, P̂ · Δu = Δa (theory.md, Eq. A3), then to the cylinder,
+//! before the step is cut; an increment that would end with a pull on the block (λ < 0,
+//! the foot of a snap-back) is not taken, and the block is pushed on from there.
 //!
 //! The block's rotation is held as under displacement control, and so is any translation
 //! whose `push_displacement` component is 0 (its increment pinned to zero, its force a
@@ -159,6 +163,18 @@ enum Constraint {
     Cylinder(f64),
     /// The energy the contacts dissipate in the increment, Σ ΔD = Δτ (Eq. A2): Δτ (J).
     Dissipation(f64),
+    /// The increment of the pushed block's displacement along P̂, P̂ · Δu = Δa (Eq. A3,
+    /// displacement control of the block with λ its force): Δa (m).
+    Push(f64),
+}
+
+/// The constraints of [`Constraint`] without their values, in the order of the counts
+/// of [`run`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    Cylinder = 0,
+    Dissipation = 1,
+    Push = 2,
 }
 
 /// A dissipation-controlled increment is accepted at its predictor only when the
@@ -184,6 +200,8 @@ enum StepFailure {
     NoConvergence(f64),
     /// The constraint has no real root for any δλ near the path.
     Divergence,
+    /// With `path = "dissipation"`: the increment ends with a pull on the pushed block.
+    Pulls,
 }
 
 impl Driver<'_> {
@@ -450,6 +468,16 @@ impl Driver<'_> {
                 };
                 return Ok(Some(self.backtrack(&w, &dp, dl, rn, (p, base), dq, lam)));
             }
+            Constraint::Push(da) => {
+                // P̂ · (w + δλ dp) = Δa: linear in δλ; P̂ · dp is the block's compliance
+                // under its force, zero only where the block cannot move
+                let ep = dot(p, &dp);
+                let dl = (da - dot(p, &w)) / ep;
+                if !dl.is_finite() {
+                    return Ok(None);
+                }
+                return Ok(Some(self.backtrack(&w, &dp, dl, rn, (p, base), dq, lam)));
+            }
         };
         // ‖dq + dr + δλ dp‖² = n Δl²: a δλ² + b δλ + c = 0
         let a = dot(&dp, &dp);
@@ -539,27 +567,39 @@ impl Driver<'_> {
         // first increment the secant matrix's response to P̂
         let mut dq = vec![0.0; n];
         let mut dlam;
-        match (previous, constraint) {
-            (Some((prev, prev_dlam, prev_d)), _) => {
-                let f = match constraint {
-                    Constraint::Cylinder(len2) => (len2 / dot(prev, prev).max(1e-300)).sqrt(),
-                    Constraint::Dissipation(tau) => (tau / prev_d.max(1e-300)).clamp(0.25, 2.0),
-                };
+        // the previous increment's scale factor, or None for a fresh predictor: a push
+        // increment is scaled only from a previous one that moved the block forward
+        let scaled = previous.and_then(|(prev, _, prev_d)| match constraint {
+            Constraint::Cylinder(len2) => Some((len2 / dot(prev, prev).max(1e-300)).sqrt()),
+            Constraint::Dissipation(tau) => Some((tau / prev_d.max(1e-300)).clamp(0.25, 2.0)),
+            Constraint::Push(da) => {
+                let moved = dot(p, prev);
+                (moved > 0.0).then(|| (da / moved).min(4.0))
+            }
+        });
+        match (previous, scaled) {
+            (Some((prev, prev_dlam, _)), Some(f)) => {
                 for (q, a) in dq.iter_mut().zip(prev) {
                     *q = f * a;
                 }
                 dlam = f * prev_dlam;
             }
-            (None, Constraint::Dissipation(_)) => {
-                unreachable!("the dissipation constraint follows a converged increment")
-            }
-            (None, Constraint::Cylinder(len2)) => {
+            _ => {
                 let trial = self.trial(&dq, &zero);
                 let r = self.out_of_balance(&f_ext(lam0), &trial.f_int);
                 let Some((ur, up)) = self.solve_pair(&trial, &r, p, true)? else {
                     return Ok(Err(StepFailure::Divergence));
                 };
-                dlam = (len2 / dot(&up, &up).max(1e-300)).sqrt();
+                dlam = match constraint {
+                    Constraint::Push(da) => (da - dot(p, &ur)) / dot(p, &up),
+                    Constraint::Cylinder(len2) => (len2 / dot(&up, &up).max(1e-300)).sqrt(),
+                    Constraint::Dissipation(_) => {
+                        unreachable!("the dissipation constraint follows a converged increment")
+                    }
+                };
+                if !dlam.is_finite() {
+                    return Ok(Err(StepFailure::Divergence));
+                }
                 for ((q, a), b) in dq.iter_mut().zip(&ur).zip(&up) {
                     *q = a + dlam * b;
                 }
@@ -585,6 +625,24 @@ impl Driver<'_> {
                 for (c, (a, b)) in self.flips.iter_mut().zip(ps.iter().zip(&trial.state)) {
                     *c += u32::from(a != b);
                 }
+                if super::super::tracing() {
+                    for (k, (a, b)) in ps
+                        .iter()
+                        .zip(&trial.state)
+                        .enumerate()
+                        .filter(|(_, (a, b))| a != b)
+                        .take(4)
+                    {
+                        eprintln!(
+                            "  flip {k} at {:?}: {a:?} -> {b:?} ({} flips), force {:?}, Δδ {:?}, law {:?}",
+                            self.cur.nodes[self.cur.contacts[k].node_m as usize],
+                            self.flips[k],
+                            trial.force[k],
+                            trial.rel[k],
+                            self.law.get(k).springs(self.area[k])
+                        );
+                    }
+                }
             }
             if super::super::tracing() {
                 eprintln!(
@@ -603,6 +661,8 @@ impl Driver<'_> {
                     Constraint::Dissipation(tau) => {
                         it > 0 || dissipated >= PREDICTOR_DISSIPATION * tau
                     }
+                    // the predictor moves the block by Δa: it meets the constraint
+                    Constraint::Push(_) => true,
                 };
                 if accept {
                     self.report.iterations = it;
@@ -648,15 +708,17 @@ impl Driver<'_> {
 /// Follow the push of `push` by arc length from the committed state under the external
 /// force `base` (N), to the displacement `push_displacement` along P̂, in increments of
 /// the settings' Δl (halved when one fails, up to `max_cuts` times in a row, and grown
-/// back after increments that converge). Returns the fraction of the path's end reached
-/// and, when it stopped short, why.
+/// back after increments that converge); with `path = "dissipation"` each increment tries
+/// Eq. A2, Eq. A3 and Eq. A1 in turn. Returns the fraction of the path's end reached,
+/// when it stopped short why, and the converged increments on the cylinder, the
+/// dissipation and under displacement control.
 pub(super) fn run(
     d: &mut Driver,
     base: &[f64],
     push: &Push,
     arc: &ArcLength,
     steps: usize,
-) -> Result<(f64, Option<String>)> {
+) -> Result<(f64, Option<String>, [usize; 3])> {
     let s = setup(d, push);
     let f = s.first;
     let mut pins = vec![(f + 2, 0.0)];
@@ -684,6 +746,7 @@ pub(super) fn run(
                 return Ok((
                     0.0,
                     Some("the pushed block is free to move: no stiffness holds it".into()),
+                    [0; 3],
                 ));
             };
             let moved = up[f] * s.dir[0] + up[f + 1] * s.dir[1];
@@ -692,25 +755,55 @@ pub(super) fn run(
         }
     };
     let mut dl = dl_max;
+    // Δa (m), the push increment of displacement control (Eq. A3), and its largest
+    // value: the push over `steps` increments
+    let da_max = s.target / steps.max(1) as f64;
+    let mut da = da_max;
     // with path = "dissipation", once switched: Δτ (J) and its largest value, the energy
     // dissipated by the increment that switched it on (grown back to it after quick
     // increments as Δl is)
     let mut tau: Option<(f64, f64)> = None;
+    // with path = "dissipation": the last increment was taken under displacement control
+    // because the dissipation constraint could not be met, and spent less than Δτ
+    let mut pushing = false;
     let mut lam = 0.0;
     // the last converged increment (unknowns, Δλ, dissipated energy)
     let mut previous: Option<(Vec<f64>, f64, f64)> = None;
     let mut cuts = 0;
+    // the constraint tried for this increment: 0 the first of `order`, then the others
+    // once it has failed `max_cuts` times in a row (or would pull on the block)
+    let mut level = 0;
+    // the increments taken on the cylinder, the dissipation and displacement control
+    let mut counts = [0usize; 3];
     // a path that never reaches its end (it turns back for good) stops after this many
     let limit = 50 * steps.max(1);
     let mut done = 0;
     while along(d) < s.target * (1.0 - 1e-9) && done < limit {
-        let prev = previous.as_ref().map(|(q, l, e)| (q.as_slice(), *l, *e));
         let free = (d.cur.n_dofs - d.pins.len()) as f64;
-        let constraint = match tau {
-            Some((t, _)) => Constraint::Dissipation(t),
-            None => Constraint::Cylinder(dl * dl * free),
+        // the constraints in the order they are tried for this increment (Gutiérrez
+        // 2004; Verhoosel et al. 2009): with path = "dissipation" the one that worked
+        // last, then the others; plain arc length has the cylinder alone
+        let order: Vec<Kind> = match (arc.dissipation, tau.is_some()) {
+            (false, _) => vec![Kind::Cylinder],
+            (true, false) => vec![Kind::Cylinder, Kind::Push],
+            (true, true) if pushing => vec![Kind::Push, Kind::Dissipation, Kind::Cylinder],
+            (true, true) => vec![Kind::Dissipation, Kind::Push, Kind::Cylinder],
         };
-        match d.arc_step(base, &s.p, lam, constraint, prev)? {
+        let kind = order[level];
+        let constraint = match kind {
+            Kind::Cylinder => Constraint::Cylinder(dl * dl * free),
+            Kind::Dissipation => Constraint::Dissipation(tau.map_or(0.0, |t| t.0)),
+            Kind::Push => Constraint::Push(da.min(s.target - along(d))),
+        };
+        let prev = previous.as_ref().map(|(q, l, e)| (q.as_slice(), *l, *e));
+        let step = match d.arc_step(base, &s.p, lam, constraint, prev)? {
+            // a push cannot pull: with path = "dissipation" an increment that takes the
+            // force on the block below zero (the foot of a snap-back) is not taken, and
+            // the next constraint pushes the block on from the last state
+            Ok((_, dlam, _)) if arc.dissipation && lam + dlam < 0.0 => Err(StepFailure::Pulls),
+            other => other,
+        };
+        match step {
             Ok((trial, dlam, dissipated)) => {
                 let fe: Vec<f64> = base
                     .iter()
@@ -731,7 +824,15 @@ pub(super) fn run(
                 let pt = d.push_point(push.block, fraction, Some(reaction));
                 d.push_curve.push(pt);
                 // the work of the push in the increment (J), by the trapezoidal rule
-                let work = (lam - 0.5 * dlam) * dot(&s.p, &dq);
+                let moved = dot(&s.p, &dq);
+                let work = (lam - 0.5 * dlam) * moved;
+                counts[kind as usize] += 1;
+                match kind {
+                    // displacement control until an increment spends Δτ again
+                    Kind::Push => pushing = tau.is_some_and(|(t, _)| dissipated < t),
+                    Kind::Dissipation => pushing = false,
+                    Kind::Cylinder => {}
+                }
                 if arc.dissipation
                     && tau.is_none()
                     && dissipated > 0.0
@@ -754,44 +855,84 @@ pub(super) fn run(
                             "the path turned back: the force on the pushed block changed sign"
                                 .into(),
                         ),
+                        counts,
                     ));
                 }
                 done += 1;
                 cuts = 0;
+                level = 0;
                 if d.report.iterations <= d.settings.max_iterations / 10 {
                     dl = (2.0 * dl).min(dl_max);
+                    da = (2.0 * da).min(da_max);
                     if let Some((t, t_max)) = &mut tau {
                         *t = (2.0 * *t).min(*t_max);
                     }
                 }
             }
             Err(why) => {
-                if cuts >= d.settings.max_cuts && tau.is_some() {
-                    // no increment that spends Δτ near the last state (the joints slide
-                    // on friction alone, or the iterations fail): back to the cylinder,
-                    // at the length of the last converged increment, until an increment
-                    // dissipates again
-                    tau = None;
+                let pulls = matches!(why, StepFailure::Pulls);
+                // the step of this constraint halved, unless that takes it below its
+                // least value: Δl and Δa their largest halved `max_cuts` times, Δτ its
+                // largest halved 2 `max_cuts` times (J4D at 26 mm turns its snap-back
+                // with Δτ at 2⁻¹⁰ of its largest; the increments that converge at smaller
+                // steps go nowhere: J7D crept by 10⁻¹² m and 10⁻¹¹ J an increment)
+                let least = 0.5f64.powi(d.settings.max_cuts as i32);
+                let size = match kind {
+                    Kind::Cylinder => (&mut dl, least * dl_max),
+                    Kind::Push => (&mut da, least * da_max),
+                    Kind::Dissipation => match &mut tau {
+                        Some((t, t_max)) => (t, least * least * *t_max),
+                        None => unreachable!("the dissipation constraint is on"),
+                    },
+                };
+                if cuts < d.settings.max_cuts && !pulls && 0.5 * *size.0 >= size.1 {
+                    // cut the step of this constraint and retry
+                    cuts += 1;
+                    *size.0 *= 0.5;
+                    continue;
+                }
+                if level + 1 < order.len() {
+                    // the next constraint, at the pace of the last converged increment
+                    level += 1;
                     cuts = 0;
-                    if let Some((q, _, _)) = &previous {
-                        let free = (d.cur.n_dofs - d.pins.len()) as f64;
-                        dl = (dot(q, q) / free).sqrt().min(dl_max);
+                    if let Some((q, _, e)) = &previous {
+                        match order[level] {
+                            Kind::Cylinder => {
+                                dl = (dot(q, q) / free).sqrt().clamp(least * dl_max, dl_max)
+                            }
+                            Kind::Push => {
+                                let moved = dot(&s.p, q).abs();
+                                da = if moved > 0.0 {
+                                    moved.clamp(least * da_max, da_max)
+                                } else {
+                                    da_max
+                                };
+                            }
+                            Kind::Dissipation => {
+                                if let Some((t, t_max)) = &mut tau {
+                                    *t = if *e > 0.0 {
+                                        e.clamp(least * least * *t_max, *t_max)
+                                    } else {
+                                        *t_max
+                                    };
+                                }
+                            }
+                        }
                     }
                     continue;
                 }
-                if cuts >= d.settings.max_cuts {
-                    let why = match why {
-                        StepFailure::NoConvergence(r) => format!("the out-of-balance force stays at {r:.2e} of the load along the arc"),
-                        StepFailure::Divergence => "the displacements grow without bound along the arc: the blocks move without restraint".to_string(),
-                    };
-                    d.pins.clear();
-                    return Ok((along(d) / s.target, Some(why)));
-                }
-                cuts += 1;
-                dl *= 0.5;
-                if let Some((t, _)) = &mut tau {
-                    *t *= 0.5;
-                }
+                let what = match order.len() {
+                    1 => "",
+                    2 => " (the cylinder and displacement control of the block tried)",
+                    _ => " (the dissipation, displacement control of the block and the cylinder tried)",
+                };
+                let why = match why {
+                    StepFailure::NoConvergence(r) => format!("the out-of-balance force stays at {r:.2e} of the load along the arc{what}"),
+                    StepFailure::Divergence => format!("the displacements grow without bound along the arc{what}: the blocks move without restraint"),
+                    StepFailure::Pulls => format!("the path turns back to a pull on the block{what}"),
+                };
+                d.pins.clear();
+                return Ok((along(d) / s.target, Some(why), counts));
             }
         }
     }
@@ -803,7 +944,8 @@ pub(super) fn run(
             Some(format!(
                 "the path did not reach the end of the push in {limit} increments"
             )),
+            counts,
         ));
     }
-    Ok((1.0, None))
+    Ok((1.0, None, counts))
 }

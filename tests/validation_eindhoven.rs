@@ -536,7 +536,8 @@ fn figure() {
 // 23, 1 % and 1 %; J7D −0.33, 6, 21 and 22, 18 % and 18 %. (J4D's figures are those of
 // the run that ended at the foot of its snap-back; since the push goes on from there
 // (docs/performance.md, "Constraint switching and the reload past the snap-back") J4D
-// ends further on, and its sweep's pattern thresholds have not been rechecked.)
+// ends at 43 % of the push with −0.85, 15, 16 and 15, 0 % and 0 %: the heels close again
+// on the reload, and `eindhoven_j4d_sweep` checks the toes crushing instead.)
 
 /// Contacts at a toe past the cap's first yield (σ² + C_ss τ² ≥ (fₘ/3)²) from which
 /// the toe counts as crushing: 10, twice J4D's 5–6 and half J6D's and J7D's 21–23.
@@ -595,13 +596,20 @@ fn eindhoven_j4d_sweep() {
         "J4D {}",
         a.peak.1
     );
-    // the diagonal stepped crack through joints and bricks; rocking at the low
-    // pre-compression, the toes only starting to crush
+    // the diagonal stepped crack through joints and bricks, and the toes crushing, as in
+    // the experiment's last stage (as recalled from Lourenço 1996, not verified:
+    // horizontal cracks at the base and the top first, then the diagonal crack, then the
+    // toes). The heels are not checked: they
+    // open on the way down the snap-back (12–14 % of the bed joints at its foot) and close
+    // again as the wall reloads, so at the end of the run (43 % of the push, past the
+    // reload) they read closed (measured at the 26 mm mesh: correlation −0.85, 15 brick
+    // cracks, heels 0 % and 0 %, 16 and 15 toe contacts past the cap's first yield at
+    // −8.5 and −8.7 MPa)
     let e = Expect {
         rho: -0.5,
         bricks: 1,
-        rocking: Some(true),
-        crushing: false,
+        rocking: None,
+        crushing: true,
     };
     check_pattern(&a.pattern, "J4D", e);
 }

@@ -300,6 +300,11 @@ fn main() {
             })
             .collect()
     };
+    let count = |v: Option<&String>, what: &str| -> usize {
+        v.and_then(|v| v.parse().ok())
+            .filter(|&n| n >= 1)
+            .unwrap_or_else(|| panic!("{what} needs a whole number >= 1"))
+    };
     let (mut ref_tolerance, mut ref_bracket) = (REF_TOLERANCE, REF_BRACKET);
     let mut ref_strategy = REF_STRATEGY.to_string();
     let mut jobs = 1usize;
@@ -338,21 +343,8 @@ fn main() {
                     .expect("--reference-strategy initial|secant|newton")
                     .clone()
             }
-            "--jobs" => {
-                jobs = it
-                    .next()
-                    .and_then(|v| v.parse().ok())
-                    .filter(|&j| j >= 1)
-                    .expect("--jobs N (N >= 1)")
-            }
-            "--threads" => {
-                threads = Some(
-                    it.next()
-                        .and_then(|v| v.parse().ok())
-                        .filter(|&t| t >= 1)
-                        .expect("--threads N (N >= 1)"),
-                )
-            }
+            "--jobs" => jobs = count(it.next(), "--jobs"),
+            "--threads" => threads = Some(count(it.next(), "--threads")),
             "--brackets" => brackets = list(it.next(), "--brackets"),
             "--csv" => csv = Some(it.next().expect("--csv FILE").clone()),
             "--plot" => plot = Some(it.next().expect("--plot DIR").clone()),

@@ -80,6 +80,18 @@ pub struct Push {
 }
 
 impl Push {
+    /// The unit direction of the push in the plane and its length (m): the end of the
+    /// path along it ([1, 0] for a zero push).
+    pub(super) fn direction(&self) -> (Point, f64) {
+        let (h, v) = (self.horizontal, self.vertical.unwrap_or(0.0));
+        let length = h.hypot(v);
+        if length > 0.0 {
+            ([h / length, v / length], length)
+        } else {
+            ([1.0, 0.0], length)
+        }
+    }
+
     fn from_scene(scene: &Scene) -> Result<Option<Push>> {
         let x = &scene.analysis.extra;
         let place = super::analysis_place;
@@ -1628,14 +1640,13 @@ pub fn run_with_progress<'a>(
             }
         };
         let points = std::mem::take(&mut d.push_curve);
-        let (h, v) = (push.horizontal, push.vertical.unwrap_or(0.0));
-        let len = h.hypot(v).max(1e-300);
+        let (dir, _) = push.direction();
         let furthest = points.iter().fold(0.0f64, |m, p| {
             let u = [
                 p.displacement[0] - points[0].displacement[0],
                 p.displacement[1] - points[0].displacement[1],
             ];
-            m.max((u[0] * h + u[1] * v) / len)
+            m.max(u[0] * dir[0] + u[1] * dir[1])
         });
         let curve = super::curve::Curve {
             control_block: push.block,

@@ -134,13 +134,7 @@ fn setup(d: &Driver, push: &Push) -> Setup {
         unreachable!("Push::from_scene admits rigid blocks only")
     };
     let f = first as usize;
-    let (h, v) = (push.horizontal, push.vertical.unwrap_or(0.0));
-    let target = h.hypot(v);
-    let dir = if target > 0.0 {
-        [h / target, v / target]
-    } else {
-        [1.0, 0.0]
-    };
+    let (dir, target) = push.direction();
     let mut p = vec![0.0; d.cur.n_dofs];
     p[f] = dir[0];
     p[f + 1] = dir[1];

@@ -144,14 +144,15 @@ pub fn run_with(
     if scene.analysis.kind != AnalysisType::Dynamic {
         // a free block that touches nothing at all is a modelling mistake (misplaced
         // coordinates, a tolerance too small), not a structure
+        // one pass over the contacts (a search per block was quadratic: 5 s of a 10⁵-unknown
+        // wall's 8.6 s run, docs/performance.md "Start-up")
+        let mut touched = vec![false; mesh.blocks.len()];
+        for c in &mesh.contacts {
+            touched[c.block_l as usize] = true;
+            touched[c.block_m as usize] = true;
+        }
         let isolated: Vec<usize> = (0..mesh.blocks.len())
-            .filter(|&b| mesh.blocks[b].dofs != crate::mesh::BlockDofs::Fixed)
-            .filter(|&b| {
-                !mesh
-                    .contacts
-                    .iter()
-                    .any(|c| c.block_l as usize == b || c.block_m as usize == b)
-            })
+            .filter(|&b| mesh.blocks[b].dofs != crate::mesh::BlockDofs::Fixed && !touched[b])
             .collect();
         if let Some(&b) = isolated.first() {
             let names: Vec<&str> = isolated

@@ -187,20 +187,14 @@ fn held(factor: &FaerCholesky) -> Result<&crate::faer_backend::CholAnalysis, Sol
     }
 }
 
-/// One connected block of ΔK and its columns of W.
-struct Block {
-    /// Its unknowns (original numbering), ascending.
-    unknowns: Vec<usize>,
-    /// The reach: supernodes on the unknowns' paths to the root, ascending.
-    nodes: Vec<usize>,
-    /// Permuted row of each local row (the columns of the reach's supernodes in order).
-    rows: Vec<usize>,
-    /// Index of its first term among all the terms.
-    first: usize,
-    /// Its terms (columns of W).
-    k: usize,
-    /// W restricted to `rows`: rows.len() × k, column-major.
-    w: Vec<f64>,
+/// W's rows on one supernode of the union of the terms' reaches.
+struct NodeW {
+    /// The supernode.
+    s: usize,
+    /// The terms whose reach contains it (indices among all the terms, ascending).
+    terms: Vec<usize>,
+    /// W[columns of s, terms]: width(s) × terms.len(), column-major.
+    x: Vec<f64>,
 }
 
 /// Counters of a [`LowRankCorrection`].
@@ -210,8 +204,12 @@ pub struct LowRankStats {
     pub rank: usize,
     /// Connected blocks of the last change.
     pub blocks: usize,
-    /// Rows of W stored for the last change (Σ over the blocks of their reach's columns).
+    /// Rows of W stored for the last change (the columns of the union of the terms'
+    /// reaches).
     pub reach_rows: usize,
+    /// Entries of W stored for the last change (Σ over those supernodes of their width
+    /// times the terms reaching them).
+    pub w_entries: usize,
     /// Wall time of the last [`LowRankCorrection::update`], s.
     pub update_seconds: f64,
     /// Wall time of the last [`LowRankCorrection::solve`], s.
@@ -232,7 +230,10 @@ pub struct LowRankCorrection {
     tree: Option<Tree>,
     /// (pattern id, numeric factorizations) of the factor the last update was made for.
     factor_id: Option<(u64, usize)>,
-    blocks: Vec<Block>,
+    /// W, supernode by supernode, ascending.
+    nodes: Vec<NodeW>,
+    /// For each block of ΔK: one past its last term, and its first unknown.
+    blocks: Vec<(usize, usize)>,
     signs: Vec<f64>,
     /// Eigenvectors of C (r × r, column-major) and the reciprocals of its eigenvalues.
     c_vectors: Vec<f64>,
@@ -269,6 +270,7 @@ impl LowRankCorrection {
     pub fn update(&mut self, factor: &FaerCholesky, k_new: &CsrMatrix) -> Result<(), SolveError> {
         let t = Instant::now();
         self.factor_id = None;
+        self.nodes.clear();
         self.blocks.clear();
         self.signs.clear();
         self.stats = LowRankStats::default();
@@ -287,7 +289,8 @@ impl LowRankCorrection {
             self.tree = Some(Tree::new(factor)?);
         }
         let tree = self.tree.as_ref().expect("tree");
-        let terms = split_change(k_new, &an.last_values);
+        let mut terms = split_change(k_new, &an.last_values);
+        terms.retain(|b| !b.signs.is_empty());
         let rank: usize = terms.iter().map(|b| b.signs.len()).sum();
         if let Some(max) = self.max_rank {
             if rank > max {
@@ -296,66 +299,24 @@ impl LowRankCorrection {
                 )));
             }
         }
-        // W, block by block
-        let mut mark = vec![NONE; tree.begin.len() - 1];
-        let mut first = 0;
-        for b in terms {
-            let k = b.signs.len();
-            if k == 0 {
-                continue;
-            }
-            let block = forward_block(tree, &an.l_values, &b, first, &mut mark)?;
-            first += k;
+        // W over the union of the reaches, C = S + WᵀW supernode by supernode
+        self.nodes = forward(tree, &an.l_values, &terms)?;
+        for b in &terms {
+            let end = self.signs.len() + b.signs.len();
+            self.blocks.push((end, b.unknowns[0]));
             self.signs.extend_from_slice(&b.signs);
-            self.blocks.push(block);
         }
-        // C = S + WᵀW, supernode by supernode
         let r = self.signs.len();
         let mut c = Mat::<f64>::zeros(r, r);
-        let mut at: Vec<Vec<(usize, usize)>> = vec![Vec::new(); tree.begin.len() - 1];
-        let mut touched = Vec::new();
-        for (bi, b) in self.blocks.iter().enumerate() {
-            let mut off = 0;
-            for &s in &b.nodes {
-                if at[s].is_empty() {
-                    touched.push(s);
-                }
-                at[s].push((bi, off));
-                off += tree.width(s);
-            }
-        }
-        let mut cols = Vec::new();
-        for &s in &touched {
-            let width = tree.width(s);
-            cols.clear();
-            for &(bi, _) in &at[s] {
-                let b = &self.blocks[bi];
-                cols.extend(b.first..b.first + b.k);
-            }
-            let y = Mat::<f64>::from_fn(width, cols.len(), |i, j| {
-                // column j of Y: term cols[j] of its block, rows of supernode s
-                let mut j = j;
-                for &(bi, off) in &at[s] {
-                    let b = &self.blocks[bi];
-                    if j < b.k {
-                        return b.w[j * b.rows.len() + off + i];
-                    }
-                    j -= b.k;
-                }
-                unreachable!("column within the blocks at s")
-            });
-            let mut g = Mat::<f64>::zeros(cols.len(), cols.len());
-            matmul(
-                g.as_mut(),
-                Accum::Replace,
-                y.transpose(),
-                y.as_ref(),
-                1.0,
-                Par::Seq,
-            );
-            for (a, &ca) in cols.iter().enumerate() {
-                for (bb, &cb) in cols.iter().enumerate() {
-                    c[(ca, cb)] += g[(a, bb)];
+        let mut g = Mat::<f64>::zeros(0, 0);
+        for nw in &self.nodes {
+            let rs = nw.terms.len();
+            let x = MatRef::from_column_major_slice(&nw.x, tree.width(nw.s), rs);
+            g.resize_with(rs, rs, |_, _| 0.0);
+            matmul(g.as_mut(), Accum::Replace, x.transpose(), x, 1.0, Par::Seq);
+            for (a, &ta) in nw.terms.iter().enumerate() {
+                for (b, &tb) in nw.terms.iter().enumerate() {
+                    c[(ta, tb)] += g[(a, b)];
                 }
             }
         }
@@ -386,11 +347,8 @@ impl LowRankCorrection {
                 let term = (0..r)
                     .max_by(|&a, &b| u[(a, i)].abs().total_cmp(&u[(b, i)].abs()))
                     .unwrap_or(0);
-                let index = self
-                    .blocks
-                    .iter()
-                    .find(|b| term < b.first + b.k)
-                    .map_or(0, |b| b.unknowns[0]);
+                let index = self.blocks.iter().find(|b| term < b.0).map_or(0, |b| b.1);
+                self.nodes.clear();
                 self.blocks.clear();
                 self.signs.clear();
                 return Err(SolveError::NotPositiveDefinite {
@@ -406,7 +364,8 @@ impl LowRankCorrection {
         self.stats = LowRankStats {
             rank: r,
             blocks: self.blocks.len(),
-            reach_rows: self.blocks.iter().map(|b| b.rows.len()).sum(),
+            reach_rows: self.nodes.iter().map(|nw| tree.width(nw.s)).sum(),
+            w_entries: self.nodes.iter().map(|nw| nw.x.len()).sum(),
             update_seconds: t.elapsed().as_secs_f64(),
             solve_seconds: 0.0,
         };
@@ -439,11 +398,12 @@ impl LowRankCorrection {
         if r > 0 {
             // z = Wᵀ y, v = C⁻¹ z, y −= W v
             let mut z = vec![0.0; r];
-            for b in &self.blocks {
-                let m = b.rows.len();
-                for t in 0..b.k {
-                    let col = &b.w[t * m..(t + 1) * m];
-                    z[b.first + t] = col.iter().zip(&b.rows).map(|(w, &p)| w * y[p]).sum();
+            for nw in &self.nodes {
+                let (b0, c) = (tree.begin[nw.s], tree.width(nw.s));
+                let ys = &y[b0..b0 + c];
+                for (j, &t) in nw.terms.iter().enumerate() {
+                    let col = &nw.x[j * c..(j + 1) * c];
+                    z[t] += col.iter().zip(ys).map(|(w, y)| w * y).sum::<f64>();
                 }
             }
             let vt_z: Vec<f64> = (0..r)
@@ -457,12 +417,13 @@ impl LowRankCorrection {
                 let col = &self.c_vectors[j * r..(j + 1) * r];
                 v.iter_mut().zip(col).for_each(|(vi, ci)| *vi += a * ci);
             }
-            for b in &self.blocks {
-                let m = b.rows.len();
-                for t in 0..b.k {
-                    let a = v[b.first + t];
-                    let col = &b.w[t * m..(t + 1) * m];
-                    col.iter().zip(&b.rows).for_each(|(w, &p)| y[p] -= a * w);
+            for nw in &self.nodes {
+                let (b0, c) = (tree.begin[nw.s], tree.width(nw.s));
+                let ys = &mut y[b0..b0 + c];
+                for (j, &t) in nw.terms.iter().enumerate() {
+                    let a = v[t];
+                    let col = &nw.x[j * c..(j + 1) * c];
+                    ys.iter_mut().zip(col).for_each(|(y, w)| *y -= a * w);
                 }
             }
         }
@@ -603,91 +564,122 @@ fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Vec<Terms> {
         .collect()
 }
 
-/// W for one block: the forward solves L X = P U over the reach of its unknowns.
-fn forward_block(
-    tree: &Tree,
-    l: &[f64],
-    terms: &Terms,
-    first: usize,
-    mark: &mut [usize],
-) -> Result<Block, SolveError> {
-    let q = terms.unknowns.len();
-    let k = terms.signs.len();
-    let mut nodes = Vec::new();
-    for &i in &terms.unknowns {
-        let mut s = tree.node_of[tree.inv[i]] as usize;
-        while s != NONE && mark[s] == NONE {
-            mark[s] = 0;
-            nodes.push(s);
-            s = tree.parent[s];
+/// W = L⁻¹ P U for all the terms: the forward solves over the union of the reaches of
+/// the blocks' unknowns (the supernodes on their paths to the root), all the terms
+/// reaching a supernode solved together with its diagonal block (a dense triangular
+/// solve with as many right-hand sides), then subtracted from the rows below it.
+fn forward(tree: &Tree, l: &[f64], blocks: &[Terms]) -> Result<Vec<NodeW>, SolveError> {
+    let nn = tree.begin.len() - 1;
+    let mut pos = vec![NONE; nn];
+    let mut stamp = vec![NONE; nn];
+    let mut nodes: Vec<NodeW> = Vec::new();
+    let mut first = 0;
+    for (bi, b) in blocks.iter().enumerate() {
+        let k = b.signs.len();
+        for &i in &b.unknowns {
+            let mut s = tree.node_of[tree.inv[i]] as usize;
+            while s != NONE && stamp[s] != bi {
+                stamp[s] = bi;
+                if pos[s] == NONE {
+                    pos[s] = nodes.len();
+                    nodes.push(NodeW {
+                        s,
+                        terms: Vec::new(),
+                        x: Vec::new(),
+                    });
+                }
+                nodes[pos[s]].terms.extend(first..first + k);
+                s = tree.parent[s];
+            }
         }
+        first += k;
     }
-    nodes.sort_unstable();
-    let mut rows = Vec::new();
-    for &s in &nodes {
-        mark[s] = rows.len();
-        rows.extend(tree.begin[s]..tree.begin[s + 1]);
+    nodes.sort_unstable_by_key(|nw| nw.s);
+    for (i, nw) in nodes.iter_mut().enumerate() {
+        pos[nw.s] = i;
+        nw.x = vec![0.0; tree.width(nw.s) * nw.terms.len()];
     }
-    let m = rows.len();
-    let local = |mark: &[usize], p: usize| {
-        let s = tree.node_of[p] as usize;
-        (mark[s] != NONE).then(|| mark[s] + p - tree.begin[s])
+    let outside = |s: usize, p: usize| {
+        SolveError::Other(format!(
+            "low-rank correction: row {p} of supernode {s} lies outside the elimination-tree path"
+        ))
     };
-    let mut w = vec![0.0; m * k];
-    for (a, &i) in terms.unknowns.iter().enumerate() {
-        let li = local(mark, tree.inv[i]).expect("unknown in its reach");
-        for t in 0..k {
-            w[t * m + li] = terms.vectors[t * q + a];
+    let mut first = 0;
+    for b in blocks {
+        let (q, k) = (b.unknowns.len(), b.signs.len());
+        for (a, &i) in b.unknowns.iter().enumerate() {
+            let p = tree.inv[i];
+            let nw = &mut nodes[pos[tree.node_of[p] as usize]];
+            let (c, row) = (tree.width(nw.s), p - tree.begin[nw.s]);
+            for t in 0..k {
+                let j = nw
+                    .terms
+                    .binary_search(&(first + t))
+                    .expect("term at its node");
+                nw.x[j * c + row] = b.vectors[t * q + a];
+            }
         }
+        first += k;
     }
-    let mut result = Ok(());
     let mut tmp = Mat::<f64>::zeros(0, 0);
-    for &s in &nodes {
+    let mut cols = Vec::new();
+    for ni in 0..nodes.len() {
+        let s = nodes[ni].s;
         let c = tree.width(s);
         let pattern = tree.pattern(s);
-        let vals = &l[tree.val_ptr[s]..tree.val_ptr[s + 1]];
-        let ls = MatRef::from_column_major_slice(vals, c + pattern.len(), c);
-        let off = mark[s];
+        let ls = MatRef::from_column_major_slice(
+            &l[tree.val_ptr[s]..tree.val_ptr[s + 1]],
+            c + pattern.len(),
+            c,
+        );
+        let rs = nodes[ni].terms.len();
         {
-            let mut x = MatMut::from_column_major_slice_mut(&mut w, m, k);
-            let mut top = x.rb_mut().subrows_mut(off, c);
-            solve_lower_triangular_in_place(ls.subrows(0, c), top.rb_mut(), Par::Seq);
-            tmp.resize_with(pattern.len(), k, |_, _| 0.0);
+            let mut x = MatMut::from_column_major_slice_mut(&mut nodes[ni].x, c, rs);
+            solve_lower_triangular_in_place(ls.subrows(0, c), x.rb_mut(), Par::Seq);
+            tmp.resize_with(pattern.len(), rs, |_, _| 0.0);
             matmul(
                 tmp.as_mut(),
                 Accum::Replace,
                 ls.subrows(c, pattern.len()),
-                top.rb(),
+                x.rb(),
                 1.0,
                 Par::Seq,
             );
         }
-        for (idx, &p) in pattern.iter().enumerate() {
-            match local(mark, p as usize) {
-                Some(li) => (0..k).for_each(|t| w[t * m + li] -= tmp[(idx, t)]),
-                None => {
-                    result = Err(SolveError::Other(format!(
-                        "low-rank correction: row {p} of supernode {s} lies outside the elimination-tree path"
-                    )));
+        // subtract from the ancestors' rows, a run of rows of one supernode at a time
+        let mut i0 = 0;
+        while i0 < pattern.len() {
+            let a = tree.node_of[pattern[i0] as usize] as usize;
+            let i1 = i0
+                + pattern[i0..]
+                    .iter()
+                    .take_while(|&&p| tree.node_of[p as usize] as usize == a)
+                    .count();
+            let pa = pos[a];
+            if pa == NONE || pa <= ni {
+                return Err(outside(s, pattern[i0] as usize));
+            }
+            let (head, tail) = nodes.split_at_mut(pa);
+            let target = &mut tail[0];
+            cols.clear();
+            for t in &head[ni].terms {
+                let j = target
+                    .terms
+                    .binary_search(t)
+                    .map_err(|_| outside(s, pattern[i0] as usize))?;
+                cols.push(j);
+            }
+            let (ca, ba) = (tree.width(a), tree.begin[a]);
+            for (ii, &p) in pattern[i0..i1].iter().enumerate() {
+                let row = p as usize - ba;
+                for (j, &ja) in cols.iter().enumerate() {
+                    target.x[ja * ca + row] -= tmp[(i0 + ii, j)];
                 }
             }
-        }
-        if result.is_err() {
-            break;
+            i0 = i1;
         }
     }
-    for &s in &nodes {
-        mark[s] = NONE;
-    }
-    result?;
-    Ok(Block {
-        unknowns: terms.unknowns.clone(),
-        nodes,
-        rows,
-        first,
-        k,
-        w,
-    })
+    Ok(nodes)
 }
 
 #[cfg(test)]

@@ -7,8 +7,10 @@
 //! P K_old Pᵀ = L Lᵀ ([`FaerCholesky`], P its fill-reducing permutation) and the change
 //! split into signed rank-one terms ΔK = K_new − K_old = U S Uᵀ (U: n × r, S = diag(±1)),
 //!
-//!     P K_new Pᵀ = L (I + W S Wᵀ) Lᵀ,   W = L⁻¹ P U,
-//!     K_new⁻¹ f = Pᵀ L⁻ᵀ (I − W C⁻¹ Wᵀ) L⁻¹ P f,   C = S + Wᵀ W   (r × r).
+//! ```text
+//! P K_new Pᵀ = L (I + W S Wᵀ) Lᵀ,   W = L⁻¹ P U,
+//! K_new⁻¹ f = Pᵀ L⁻ᵀ (I − W C⁻¹ Wᵀ) L⁻¹ P f,   C = S + Wᵀ W   (r × r).
+//! ```
 //!
 //! * *Terms.* ΔK is read as the difference of the new values and those of the held
 //!   factorization; its nonzero entries fall into connected blocks (one per changed

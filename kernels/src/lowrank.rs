@@ -291,7 +291,7 @@ impl LowRankCorrection {
             self.tree = Some(Tree::new(factor)?);
         }
         let tree = self.tree.as_ref().expect("tree");
-        let mut terms = split_change(k_new, &an.last_values);
+        let mut terms = split_change(k_new, &an.last_values)?;
         terms.retain(|b| !b.signs.is_empty());
         let rank: usize = terms.iter().map(|b| b.signs.len()).sum();
         if let Some(max) = self.max_rank {
@@ -479,7 +479,7 @@ struct Terms {
 
 /// ΔK = values of `k_new` − `old`, split into connected blocks and each block into signed
 /// rank-one terms by its eigendecomposition.
-fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Vec<Terms> {
+fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Result<Vec<Terms>, SolveError> {
     let p = &k_new.pattern;
     let n = p.n();
     let (rp, ci) = (p.row_ptr(), p.col_idx());
@@ -487,6 +487,12 @@ fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Vec<Terms> {
     for i in 0..n {
         for e in rp[i]..rp[i + 1] {
             let d = k_new.values[e] - old[e];
+            if !d.is_finite() {
+                return Err(SolveError::Other(format!(
+                    "low-rank correction: the new matrix has the non-finite value {} at row {i}, column {}",
+                    k_new.values[e], ci[e]
+                )));
+            }
             if d != 0.0 {
                 changed.push((i, ci[e] as usize, d));
             }
@@ -539,29 +545,26 @@ fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Vec<Terms> {
         .zip(dense)
         .map(|(unknowns, d)| {
             let q = unknowns.len();
+            let eig = d.self_adjoint_eigen(Side::Lower).map_err(|e| {
+                SolveError::Other(format!(
+                    "low-rank correction: no eigendecomposition of the change at unknowns {unknowns:?}: {e:?}"
+                ))
+            })?;
             let mut out = Terms {
                 unknowns,
                 vectors: Vec::new(),
                 signs: Vec::new(),
             };
-            if let Ok(eig) = d.self_adjoint_eigen(Side::Lower) {
-                let lam = eig.S().column_vector();
-                let big = (0..q).map(|i| lam[i].abs()).fold(0.0, f64::max);
-                for t in 0..q {
-                    if lam[t].abs() > DROP * big {
-                        let s = lam[t].abs().sqrt();
-                        out.vectors.extend((0..q).map(|i| s * eig.U()[(i, t)]));
-                        out.signs.push(lam[t].signum());
-                    }
+            let lam = eig.S().column_vector();
+            let big = (0..q).map(|i| lam[i].abs()).fold(0.0, f64::max);
+            for t in 0..q {
+                if lam[t].abs() > DROP * big {
+                    let s = lam[t].abs().sqrt();
+                    out.vectors.extend((0..q).map(|i| s * eig.U()[(i, t)]));
+                    out.signs.push(lam[t].signum());
                 }
-            } else {
-                // no eigendecomposition (non-finite values): keep the change as q
-                // unknowns with a NaN sign, which C reports
-                out.vectors
-                    .extend((0..q * q).map(|i| if i % (q + 1) == 0 { 1.0 } else { 0.0 }));
-                out.signs.extend(std::iter::repeat_n(f64::NAN, q));
             }
-            out
+            Ok(out)
         })
         .collect()
 }
@@ -953,6 +956,24 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A non-finite value in K_new, or a matrix of another size, is an error, not a panic.
+    #[test]
+    fn bad_input_is_an_error() {
+        let (n, old) = grid(6, 5);
+        let k_old = stiffness(n, &old, &old);
+        let mut backend = FaerCholesky::new();
+        let mut c = LowRankCorrection::new();
+        assert!(c.update(&backend, &k_old).is_err(), "nothing factorized");
+        backend.factorize(&k_old).unwrap();
+        let mut k_new = k_old.clone();
+        k_new.values[7] = f64::NAN;
+        assert!(c.update(&backend, &k_new).is_err());
+        let (m, small) = grid(3, 2);
+        assert!(c.update(&backend, &stiffness(m, &small, &small)).is_err());
+        c.update(&backend, &k_old).unwrap();
+        assert!(c.solve(&backend, &mut vec![1.0; n + 1]).is_err());
     }
 
     /// The rank limit refuses a larger change with an error naming the fix.

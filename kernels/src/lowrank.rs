@@ -30,8 +30,8 @@
 //!   by the inertia of [[I, W], [Wᵀ, −S]] (whose two Schur complements are −C and
 //!   I + W S Wᵀ), K_new is positive definite exactly when C has as many negative
 //!   eigenvalues as S has −1's. A change that makes K_new indefinite, or so nearly
-//!   singular that an eigenvalue of C falls below 10⁻⁹ of the largest (a contact opening
-//!   into a mechanism), gives [`SolveError::NotPositiveDefinite`]: the caller then
+//!   singular that an eigenvalue of C falls below 10⁻⁹ of max(1, the largest) (a contact
+//!   opening into a mechanism), gives [`SolveError::NotPositiveDefinite`]: the caller then
 //!   refactorizes, which reports the failed pivot.
 //! * *Solve.* One forward and one backward substitution with faer's factor (faer's own
 //!   kernels), between them Wᵀ y over the reach rows, C⁻¹ by its eigenvectors and

@@ -33,6 +33,11 @@
 //! iterations) with its iterations and true residual, and the numeric refactorization
 //! plus solve the driver does instead when more than a few contacts changed, all against
 //! one numeric refactorization of the same matrix (faer-cholesky, AMD, one thread).
+//! The last columns give the exact correction through the held factor instead
+//! (`dfem_kernels::LowRankCorrection`, the Woodbury identity inside the factor): the
+//! rank of the change, the rows and entries of W = L⁻¹ P U, the set-up and the solve
+//! (medians of 10), the true residual, and the whole iteration (update of the matrix +
+//! set-up + solve) against the refactorization.
 
 use dfem::analysis;
 use dfem::assembly::{diagonal, LocalStiffness, System};
@@ -40,6 +45,7 @@ use dfem::solve::reuse::solve_with_factor;
 use dfem::solve::{block_partition, configure, LinearBackend};
 use dfem_kernels::{
     max_relative_difference, CsrMatrix, FaerCholesky, FaerCholeskySubstructured, FillOrdering,
+    LowRankCorrection,
 };
 use std::time::Instant;
 
@@ -169,6 +175,9 @@ fn true_residual(k: &CsrMatrix, x: &[f64], f: &[f64]) -> f64 {
     norm(&mut f.iter().zip(&kx).map(|(a, b)| a - b)) / norm(&mut f.iter().copied())
 }
 
+/// Repetitions of the low-rank correction in the `--secant` table.
+const LOWRANK_REPS: usize = 10;
+
 /// The `--secant` table (see the module's documentation).
 fn secant_iteration(
     sc: &dfem::scene::Scene,
@@ -200,14 +209,23 @@ fn secant_iteration(
     let (refactor, refactor_cpu) = (median(&mut wall), median(&mut cpu));
     let mut x = f.clone();
     let (_, solve, solve_cpu) = timed(|| fresh.solve(&mut x).expect("solve"));
+    // the low-rank correction's symbolic phase (the supernodes' elimination tree), once
+    // per analysis: timed with a change of rank 0
+    let mut lowrank = LowRankCorrection::new();
+    let (_, t_sym, _) = timed(|| lowrank.update(&held, &k).expect("no change"));
+    // the first update of the matrix builds the element adjacency, once per run: made
+    // here so that every row of the table times a warm update
+    let mut warm = local0.clone();
+    warm[0] = [[0.0; 2]; 2];
+    let (_, t_first, _) = timed(|| system.stiffness_update(m, &local0, &warm, &mut k.clone()));
     println!(
-        "# deformable wall: {} unknowns, {} contacts, factor {} entries; numeric refactorization (faer-cholesky, AMD, 1 thread), median of {reps}: {refactor:.3} s wall, {refactor_cpu:.2} s CPU; one solve {solve:.3} s wall, {solve_cpu:.2} s CPU\n",
+        "# deformable wall: {} unknowns, {} contacts, factor {} entries; numeric refactorization (faer-cholesky, AMD, 1 thread), median of {reps}: {refactor:.3} s wall, {refactor_cpu:.2} s CPU; one solve {solve:.3} s wall, {solve_cpu:.2} s CPU; low-rank correction's symbolic phase {t_sym:.3} s; first update of the matrix (builds the element adjacency) {t_first:.3} s\n",
         k.pattern.n(),
         local0.len(),
         fresh.stats().factor_nnz
     );
-    println!("| contacts changed | share | whole assembly (s) | update (s) | PCG on the old factor: iterations | PCG (s) | PCG true residual | update + PCG / refactorization | (CPU) | refactorization + solve (s) | its true residual | update + refactorization + solve / refactorization | (CPU) |");
-    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("| contacts changed | share | whole assembly (s) | update (s) | PCG on the old factor: iterations | PCG (s) | PCG true residual | update + PCG / refactorization | (CPU) | refactorization + solve (s) | its true residual | update + refactorization + solve / refactorization | (CPU) | low-rank: rank | W rows, entries | correction set-up (s) | its solve (s) | its true residual | update + correction + solve / refactorization | (CPU) |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let nc = local0.len();
     for &share in fractions {
         let every = ((1.0 / share).round() as usize).max(1);
@@ -243,8 +261,37 @@ fn secant_iteration(
             fresh.factorize(&upd).expect("refactorization");
             fresh.solve(&mut x).expect("solve");
         });
+        // the low-rank correction, LOWRANK_REPS times (each takes a few hundredths of a
+        // second: the medians of the walls, the mean of the CPU ticks)
+        let (mut w_set, mut w_solve, mut cpu) = (Vec::new(), Vec::new(), 0.0);
+        let mut x_lr = f.clone();
+        let mut outcome = Ok(());
+        for _ in 0..LOWRANK_REPS {
+            x_lr.copy_from_slice(&f);
+            let (lr, t_lr, c_lr) = timed(|| lowrank.update(&held, &upd));
+            let (lr_solve, t_lr_solve, c_lr_solve) = timed(|| lowrank.solve(&held, &mut x_lr));
+            outcome = lr.and(lr_solve);
+            w_set.push(t_lr);
+            w_solve.push(t_lr_solve);
+            cpu += (c_lr + c_lr_solve) / LOWRANK_REPS as f64;
+        }
+        let lr_cells = match outcome {
+            Ok(()) => {
+                let (t_lr, t_lr_solve) = (median(&mut w_set), median(&mut w_solve));
+                format!(
+                    "{} | {}, {} | {t_lr:.4} | {t_lr_solve:.4} | {:.1e} | {:.2} | {:.2}",
+                    lowrank.stats().rank,
+                    lowrank.stats().reach_rows,
+                    lowrank.stats().w_entries,
+                    true_residual(&upd, &x_lr, &f),
+                    (t_upd + t_lr + t_lr_solve) / refactor,
+                    (c_upd + cpu) / refactor_cpu,
+                )
+            }
+            Err(e) => format!("{e} | | | | | |"),
+        };
         println!(
-            "| {} | {:.2} % | {t_whole:.4} | {t_upd:.4} | {its} | {t_pcg:.3} | {pcg_res:.1e} | {:.2} | {:.2} | {t_ref:.3} | {:.1e} | {:.2} | {:.2} |",
+            "| {} | {:.2} % | {t_whole:.4} | {t_upd:.4} | {its} | {t_pcg:.3} | {pcg_res:.1e} | {:.2} | {:.2} | {t_ref:.3} | {:.1e} | {:.2} | {:.2} | {lr_cells} |",
             changed.len(),
             100.0 * changed.len() as f64 / nc as f64,
             (t_upd + t_pcg) / refactor,

@@ -72,15 +72,15 @@ enum Kind {
 
 /// Symbolic analysis and buffers kept for one pattern.
 pub(crate) struct CholAnalysis {
-    pattern: Arc<CsrPattern>,
+    pub(crate) pattern: Arc<CsrPattern>,
     col_ptr: Vec<u32>,
     pub(crate) symbolic: SymbolicCholesky<u32>,
     pub(crate) l_values: Vec<f64>,
     pub(crate) mem: MemBuffer,
     diag_pos: Vec<usize>,
-    factored: bool,
+    pub(crate) factored: bool,
     /// Values of the last successful factorization (to skip an identical one).
-    last_values: Vec<f64>,
+    pub(crate) last_values: Vec<f64>,
 }
 
 impl CholAnalysis {
@@ -508,6 +508,11 @@ impl FaerCholesky {
     /// A backend with no analysis yet.
     pub fn new() -> Self {
         Self(CholeskyCore::new(Kind::Llt))
+    }
+
+    /// The shared core (its analysis holds the factor), for [`crate::lowrank`].
+    pub(crate) fn core(&self) -> &CholeskyCore {
+        &self.0
     }
 
     /// Sets faer's supernodal threshold (takes effect at the next analysis): 1 = automatic

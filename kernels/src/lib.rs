@@ -6,6 +6,8 @@
 //! * [`assembly`]: deterministic parallel assembly ([`AssemblyPlan`]).
 //! * [`backend`]: the [`LinearBackend`] trait and the registry [`backend_from_name`].
 //! * [`faer_backend`]: sparse Cholesky LLᵀ, LDLᵀ and LU on faer.
+//! * [`lowrank`]: solves with a matrix changed on few unknowns through the held
+//!   Cholesky factor of the old one (Woodbury inside the factor).
 //! * [`split`]: sparse Cholesky on two threads through a METIS vertex bisection.
 //! * [`substructure`]: sparse Cholesky by substructuring, k subdomains in parallel, the
 //!   unchanged ones reused between factorizations.
@@ -21,6 +23,7 @@ pub mod assembly;
 pub mod backend;
 pub mod csr;
 pub mod faer_backend;
+pub mod lowrank;
 pub mod mm;
 pub mod ordering;
 mod partial;
@@ -35,6 +38,7 @@ pub use backend::{
 };
 pub use csr::{CsrMatrix, CsrPattern};
 pub use faer_backend::{FaerCholesky, FaerLdlt, FaerLu};
+pub use lowrank::{LowRankCorrection, LowRankStats};
 pub use ordering::{metis_partition, metis_partition_graph, FillOrdering};
 pub use pcg::{BlockNodes2d, CoarseCorrection, CoarseSpace, Pcg, Preconditioner};
 pub use split::FaerCholeskySplit;

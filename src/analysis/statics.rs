@@ -299,22 +299,24 @@ pub struct Driver<'a> {
     /// Per contact: its changes of state in the iterations of the current arc-length
     /// increment (`arc_length`; empty under displacement control).
     flips: Vec<u32>,
-    /// Per contact: the linearization of its law that it keeps for the rest of the
+    /// Per contact: the linear law (a chord of its law) that it keeps for the rest of the
     /// current arc-length increment (the contact-state corrector, docs/theory.md,
     /// "Contact-state corrector", Eq. F1; empty, or all `None`, elsewhere).
     frozen: Vec<Option<Frozen>>,
 }
 
-/// A contact held in one state of its law for the rest of an arc-length increment: the
-/// law's linearization at the iterate where it was frozen, F(Δδ) = F* + T (Δδ − Δδ*)
-/// (docs/theory.md, Eq. F1), smooth where the law has a kink.
+/// A contact held in one state of its law for the rest of an arc-length increment: a
+/// fixed linear law through its force at the iterate where it was frozen,
+/// F(Δδ) = F* + T (Δδ − Δδ*) (docs/theory.md, Eq. F1: T the chord from the committed
+/// force), smooth where the law has a kink.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Frozen {
     /// Δδ* (m): the relative displacement increment where the law was linearized.
     pub d: [f64; 2],
     /// F* (N): the law's force there (normal, shear).
     pub f: [f64; 2],
-    /// T (N/m): the law's tangent there (rows Fₙ, Fₛ; columns δₙ, δₛ).
+    /// T (N/m): the frozen law's slope (rows Fₙ, Fₛ; columns δₙ, δₛ), the chord of
+    /// `arc_length::chord_law`.
     pub t: LocalStiffness,
     /// The law's state there, which the contact keeps.
     pub state: ContactState,

@@ -43,12 +43,14 @@
 
 use super::*;
 
-/// Changes of state of a contact within one arc-length increment after which its tangent
-/// is the chord from its committed force (and its secant the elastic springs): on the
-/// Eindhoven wall (docs/performance.md) contacts at the kink of a softening law (its peak,
-/// the onset of slip) alternated between the two sides for every iteration of an
-/// increment, and on the snap-back joint of tests/validation_softening.rs Newton cycled at
-/// the peak with the residual between 2·10⁻⁶ and 7·10⁻⁵ of the load.
+/// Changes of state of a contact within one arc-length increment after which it is
+/// frozen at the chord of its law from its committed force (the contact-state corrector,
+/// docs/theory.md, Eq. F1; its secant the elastic springs): on the Eindhoven wall
+/// (docs/performance.md) contacts at the kinks of their laws (the peak of a softening
+/// joint, the onset of slip, a brick crack closing) alternated between the two sides for
+/// every iteration of an increment, and on the snap-back joint of
+/// tests/validation_softening.rs Newton cycled at the peak with the residual between
+/// 2·10⁻⁶ and 7·10⁻⁵ of the load. Two instead of three stopped J6D at its old point.
 pub(super) const FLIP_LIMIT: u32 = 3;
 
 /// `[analysis] path = "arc_length"` and `arc_length` (m).
@@ -208,7 +210,7 @@ enum StepFailure {
 /// `state` at the increment `d` (m) from its committed force `f0` (N): the chord from
 /// (0, `f0`) to (`d`, `f`), each component on its own, the elastic spring `springs`
 /// where that component has not moved. The chord lies between the slopes on the two
-/// sides of a kink the contact has crossed, so that the re-linearizations of Eq. F2
+/// sides of a kink the contact has crossed, so that the new chords of Eq. F2
 /// close in on the kink as by regula falsi: at the peak of the snap-back joint of
 /// tests/validation_softening.rs (c) the tangent of either side cycled, and J7D with the
 /// tangent in place of the chord stopped where it had stopped without the corrector
@@ -598,8 +600,8 @@ impl Driver<'_> {
     /// contact that changes state [`FLIP_LIMIT`] times in the increment is frozen
     /// (Eq. F1) for the rest of it; when the iterations converge with contacts frozen,
     /// the true laws decide: the increment is accepted if the out-of-balance force with
-    /// the true laws is within the tolerance, else every frozen contact is linearized
-    /// again at the point reached and the iterations go on from there (Eq. F2).
+    /// the true laws is within the tolerance, else every frozen contact takes the chord
+    /// to the point reached and the iterations go on from there (Eq. F2).
     fn arc_step(
         &mut self,
         base: &[f64],
@@ -687,6 +689,7 @@ impl Driver<'_> {
                         rn_true / s_true
                     );
                 }
+                // the chords to this point (regula falsi on the kinks)
                 self.frozen = held
                     .iter()
                     .enumerate()
@@ -695,8 +698,8 @@ impl Driver<'_> {
                 self.stats.contact_releases += 1;
                 (trial, r, scale, rn) = (truth, r_true, s_true, rn_true);
                 if rn > self.settings.tolerance * scale {
-                    // go on from here, the frozen laws now the linearizations at this
-                    // point (their forces the true ones): a new start for the stall test
+                    // go on from here, the frozen laws now the chords to this point
+                    // (their forces the true ones): a new start for the stall test
                     best_rn = f64::INFINITY;
                 } else {
                     self.frozen.iter_mut().for_each(|f| *f = None);

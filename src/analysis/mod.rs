@@ -144,7 +144,7 @@ pub fn run_with(
     if scene.analysis.kind != AnalysisType::Dynamic {
         // a free block that touches nothing at all is a modelling mistake (misplaced
         // coordinates, a tolerance too small), not a structure
-        // one pass over the contacts (a search per block was quadratic: 5 s of a 10⁵-unknown
+        // one pass over the contacts (a search per block was quadratic: 6 s of a 10⁵-unknown
         // wall's 8.6 s run, docs/performance.md "Start-up, and the 10⁶-unknown wall")
         let mut touched = vec![false; mesh.blocks.len()];
         for c in &mesh.contacts {

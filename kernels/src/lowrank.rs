@@ -68,6 +68,17 @@ use std::time::Instant;
 const DROP: f64 = 1e-13;
 /// An eigenvalue of C below this fraction of its largest reports a (nearly) singular K_new.
 const SINGULAR: f64 = 1e-9;
+/// With a rank limit r ([`LowRankCorrection::with_max_rank`]), a change with more than
+/// `ENTRIES_PER_RANK` × r nonzero entries is refused as soon as the scan of ΔK meets them
+/// (before any block is formed): a contact's Bᵀ Δk B has rank ≤ 2 and at most 8 × 8
+/// entries (two nodes of two unknowns on each face, METHOD.md §3), 32 entries per unit of
+/// rank, so this leaves a factor 2 while refusing a change of every entry (a new
+/// geometry) after reading about 64 r of them.
+const ENTRIES_PER_RANK: usize = 64;
+/// With a rank limit r, a connected block of ΔK on more than `UNKNOWNS_PER_RANK` × r
+/// unknowns is refused before its dense eigendecomposition (q³ work): a contact adds at
+/// most 8 unknowns and rank ≥ 1 when it changed.
+const UNKNOWNS_PER_RANK: usize = 8;
 const NONE: usize = usize::MAX;
 
 /// The elimination tree of the held factor's supernodes (columns for a simplicial one).
@@ -242,6 +253,8 @@ pub struct LowRankCorrection {
     c_inv_values: Vec<f64>,
     max_rank: Option<usize>,
     stats: LowRankStats,
+    /// K_new's values at the last successful update (for [`LowRankCorrection::solve_changed`]).
+    new_values: Vec<f64>,
 }
 
 impl LowRankCorrection {
@@ -291,7 +304,10 @@ impl LowRankCorrection {
             self.tree = Some(Tree::new(factor)?);
         }
         let tree = self.tree.as_ref().expect("tree");
-        let mut terms = split_change(k_new, &an.last_values)?;
+        let limits = self
+            .max_rank
+            .map(|r| (ENTRIES_PER_RANK * r.max(1), UNKNOWNS_PER_RANK * r.max(1)));
+        let mut terms = split_change(k_new, &an.last_values, limits)?;
         terms.retain(|b| !b.signs.is_empty());
         let rank: usize = terms.iter().map(|b| b.signs.len()).sum();
         if let Some(max) = self.max_rank {
@@ -372,7 +388,30 @@ impl LowRankCorrection {
             solve_seconds: 0.0,
         };
         self.factor_id = Some((an.pattern.id(), factor.stats().numeric_factorizations));
+        self.new_values.clone_from(&k_new.values);
         Ok(())
+    }
+
+    /// rhs ← K_new⁻¹ rhs: [`update`](Self::update) for `k_new` unless the last successful
+    /// one was made for the same values and the same held factorization (several solves
+    /// with one K_new), then [`solve`](Self::solve). The work of
+    /// [`FaerCholesky`]'s `LinearBackend::solve_changed`.
+    pub fn solve_changed(
+        &mut self,
+        factor: &FaerCholesky,
+        k_new: &CsrMatrix,
+        rhs: &mut [f64],
+    ) -> Result<(), SolveError> {
+        let current = held(factor)
+            .map(|an| (an.pattern.id(), factor.stats().numeric_factorizations))
+            .ok();
+        let fresh = current.is_some()
+            && self.factor_id == current
+            && crate::backend::same_bits(&self.new_values, &k_new.values);
+        if !fresh {
+            self.update(factor, k_new)?;
+        }
+        self.solve(factor, rhs)
     }
 
     /// rhs ← K_new⁻¹ rhs for the K_new of the last successful [`update`](Self::update),
@@ -479,7 +518,14 @@ struct Terms {
 
 /// ΔK = values of `k_new` − `old`, split into connected blocks and each block into signed
 /// rank-one terms by its eigendecomposition.
-fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Result<Vec<Terms>, SolveError> {
+/// `limits`: the largest number of changed entries and of unknowns in one block (refused
+/// with an error as soon as exceeded).
+fn split_change(
+    k_new: &CsrMatrix,
+    old: &[f64],
+    limits: Option<(usize, usize)>,
+) -> Result<Vec<Terms>, SolveError> {
+    let (max_entries, max_block) = limits.unwrap_or((usize::MAX, usize::MAX));
     let p = &k_new.pattern;
     let n = p.n();
     let (rp, ci) = (p.row_ptr(), p.col_idx());
@@ -494,6 +540,11 @@ fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Result<Vec<Terms>, SolveError
                 )));
             }
             if d != 0.0 {
+                if changed.len() == max_entries {
+                    return Err(SolveError::Other(format!(
+                        "low-rank correction: more than {max_entries} entries changed (from row {i} on); refactorize"
+                    )));
+                }
                 changed.push((i, ci[e] as usize, d));
             }
         }
@@ -529,6 +580,13 @@ fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Result<Vec<Terms>, SolveError
         block_of[a] = block_of[r];
         local[a] = blocks[block_of[a]].len();
         blocks[block_of[a]].push(unknowns[a]);
+    }
+    if let Some(b) = blocks.iter().find(|b| b.len() > max_block) {
+        return Err(SolveError::Other(format!(
+            "low-rank correction: a connected change on {} unknowns (from unknown {}), above the limit {max_block}; refactorize",
+            b.len(),
+            b[0]
+        )));
     }
     let mut dense: Vec<Mat<f64>> = blocks
         .iter()
@@ -987,5 +1045,103 @@ mod tests {
         let mut c = LowRankCorrection::new().with_max_rank(1);
         let err = c.update(&backend, &stiffness(n, &old, &new)).unwrap_err();
         assert!(err.to_string().contains("rank 2") && err.to_string().contains("refactorize"));
+    }
+
+    /// `LinearBackend::solve_changed` of `faer-cholesky` (through the trait object, as
+    /// the driver calls it): the grid's springs changed as in
+    /// [`against_a_fresh_factorization`] (rank 5) give faer's fresh solution of K_new to
+    /// the same 1e-9 (both carry cond(K)·ε ≈ 10⁻¹², see there) and count in the
+    /// backend's stats; the held factor still solves K_old (compared with a second
+    /// backend's factorization of K_old: bit-identical, the same factorization); a second
+    /// call with the same K_new reuses the update and gives the same bits.
+    #[test]
+    fn solve_changed_through_the_trait() {
+        let (n, old) = grid(20, 12);
+        let mut new = old.clone();
+        new[30].k = [0.0, 0.0];
+        new[101].k[0] *= 4.0;
+        new[250].k = [0.0, 0.0];
+        let (k_old, k_new) = (stiffness(n, &old, &old), stiffness(n, &old, &new));
+        let f = load(n);
+        for name in ["faer-cholesky", "faer-cholesky-metis"] {
+            let mut backend = crate::backend::backend_from_name(name).unwrap();
+            let mut x = f.clone();
+            assert!(
+                backend.solve_changed(&k_new, &mut x).is_err(),
+                "{name}: nothing factorized"
+            );
+            backend.factorize(&k_old).unwrap();
+            let mut x = f.clone();
+            backend.solve_changed(&k_new, &mut x).unwrap();
+            let mut fresh = crate::backend::backend_from_name(name).unwrap();
+            fresh.factorize(&k_new).unwrap();
+            let mut want = f.clone();
+            fresh.solve(&mut want).unwrap();
+            let diff = norm(x.iter().zip(&want).map(|(a, b)| a - b)) / norm(want.iter().copied());
+            assert!(diff < 1e-9, "{name}: relative difference {diff:e}");
+            let st = backend.stats();
+            assert_eq!(
+                (st.changed_solves, st.last_changed_rank, st.max_changed_rank),
+                (1, 5, 5),
+                "{name}"
+            );
+            assert_eq!(st.numeric_factorizations, 1, "{name}: no refactorization");
+            let mut again = f.clone();
+            backend.solve_changed(&k_new, &mut again).unwrap();
+            assert!(crate::backend::same_bits(&again, &x), "{name}");
+            let (mut a, mut b) = (f.clone(), f.clone());
+            backend.solve(&mut a).unwrap();
+            fresh.factorize(&k_old).unwrap();
+            fresh.solve(&mut b).unwrap();
+            assert!(crate::backend::same_bits(&a, &b), "{name}: the held factor");
+        }
+    }
+
+    /// A change of every entry (the matrix of a new geometry: all values × 1.001) is
+    /// refused after reading 64 × the rank limit of them, with an error naming the fix;
+    /// so is one connected change on more unknowns than 8 × the limit (a row of springs
+    /// along the grid all changed, one block of 2 × 20 unknowns, limit 2), before its
+    /// eigendecomposition; the backend then refactorizes as usual. Backends without the
+    /// path report `Unsupported`.
+    #[test]
+    fn solve_changed_refuses_what_does_not_pay() {
+        let (n, old) = grid(20, 12);
+        let k_old = stiffness(n, &old, &old);
+        let f = load(n);
+        let mut backend = FaerCholesky::new().with_changed_max_rank(2);
+        backend.factorize(&k_old).unwrap();
+        let mut scaled = k_old.clone();
+        scaled.values.iter_mut().for_each(|v| *v *= 1.001);
+        let err = backend.solve_changed(&scaled, &mut f.clone()).unwrap_err();
+        assert!(
+            err.to_string().contains("more than 128 entries changed")
+                && err.to_string().contains("refactorize"),
+            "{err}"
+        );
+        // the horizontal springs of the bottom row (nodes 0..20), stiffened: one block
+        let mut new = old.clone();
+        for s in new.iter_mut() {
+            if s.a < 19 && s.b == Some(s.a + 1) {
+                s.k[0] *= 2.0;
+            }
+        }
+        let err = backend
+            .solve_changed(&stiffness(n, &old, &new), &mut f.clone())
+            .unwrap_err();
+        assert!(err.to_string().contains("on 20 unknowns"), "{err}");
+        assert_eq!(backend.stats().changed_solves, 0);
+        backend.factorize(&scaled).unwrap();
+        let mut x = f.clone();
+        backend.solve(&mut x).unwrap();
+        assert!(residual(&scaled, &x, &f) < 1e-12);
+        for name in ["faer-ldlt", "faer-lu", "pcg", "faer-cholesky-split"] {
+            let mut other = crate::backend::backend_from_name(name).unwrap();
+            other.factorize(&k_old).unwrap();
+            let err = other.solve_changed(&scaled, &mut f.clone()).unwrap_err();
+            assert!(
+                matches!(err, SolveError::Unsupported { backend, .. } if backend == name),
+                "{name}: {err:?}"
+            );
+        }
     }
 }

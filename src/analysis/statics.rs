@@ -350,6 +350,11 @@ const TANGENT_TOLERANCE: f64 = 1e-3;
 /// Conjugate-gradient iterations after which the reused factorization stops paying and the
 /// secant matrix is refactorized.
 const REUSE_MAX_ITERATIONS: usize = 8;
+/// A secant correction is solved with the held factorization corrected for the change
+/// ([`Driver::changed`]) when at most this many contacts changed state since it was
+/// computed (each a change of rank ≤ 2); the backend's own rank limit
+/// (`dfem_kernels::faer_backend::CHANGED_MAX_RANK`) refuses the larger changes.
+const LOW_RANK_MAX_CHANGES: usize = 64;
 /// Relative residual of a correction computed with a reused factorization: far below the
 /// out-of-balance tolerances (≥ 1e-8), so the iterations see no difference.
 const REUSE_TOLERANCE: f64 = 1e-10;
@@ -600,6 +605,9 @@ impl<'a> Driver<'a> {
                 let local = self.local_stiffness(trial, states, newton);
                 self.assemble_kbuf(local);
                 if !newton {
+                    if let Some(x) = self.changed(states, r) {
+                        return Ok(Some(x));
+                    }
                     if let Some(x) = self.reuse(states, r) {
                         return Ok(Some(x));
                     }
@@ -675,6 +683,20 @@ impl<'a> Driver<'a> {
             }
             self.held = Held::Secant(states.to_vec());
         }
+        // the secant matrix in `states`, when the held factorization is of a few contacts
+        // in other states on the same geometry: GMRES is then preconditioned with the
+        // factorization corrected for them (`LinearBackend::solve_changed`), which leaves
+        // the friction–normal coupling of the slipping contacts alone to iterate on
+        let near = match self.changed_since_factor(states) {
+            Some(c) if c > 0 && c <= LOW_RANK_MAX_CHANGES => {
+                let local = self.local_stiffness(trial, states, false);
+                self.assemble_kbuf(local);
+                let mut z = r.to_vec();
+                let ok = self.backend.solve_changed(&self.kbuf, &mut z).is_ok();
+                ok.then(|| self.kbuf.clone())
+            }
+            _ => None,
+        };
         let local = self.local_stiffness(trial, states, true);
         self.assemble_kbuf(local);
         // an inexact Newton step: the linear residual left is a tenth of what counts as
@@ -684,13 +706,23 @@ impl<'a> Driver<'a> {
         let rn = Self::norm(r);
         let tolerance =
             (0.1 * self.converged_norm / rn.max(1e-300)).clamp(REUSE_TOLERANCE, TANGENT_TOLERANCE);
-        let out = crate::solve::reuse::gmres_with_factor(
-            &self.kbuf,
-            &mut *self.backend,
-            r,
-            tolerance,
-            TANGENT_MAX_ITERATIONS,
-        )?;
+        let out = match &near {
+            Some(near) => crate::solve::reuse::gmres_with_changed_factor(
+                &self.kbuf,
+                near,
+                &mut *self.backend,
+                r,
+                tolerance,
+                TANGENT_MAX_ITERATIONS,
+            ),
+            None => crate::solve::reuse::gmres_with_factor(
+                &self.kbuf,
+                &mut *self.backend,
+                r,
+                tolerance,
+                TANGENT_MAX_ITERATIONS,
+            ),
+        }?;
         // a step of the size of the model: K_t singular up to round-off, as in `correction`
         let size = self.model_size();
         if out.x.iter().any(|v| v.abs() > 0.1 * size) {
@@ -698,6 +730,53 @@ impl<'a> Driver<'a> {
         }
         self.stats.reused_factorizations += 1;
         self.stats.reuse_iterations += out.iterations;
+        if super::tracing() {
+            eprintln!(
+                "  tangent by GMRES: {} iterations (corrected preconditioner: {})",
+                out.iterations,
+                near.is_some()
+            );
+        }
+        Some(out.x)
+    }
+
+    /// Contacts whose state in `now` differs from that of the held secant factorization;
+    /// `None` when no secant factorization is held.
+    fn changed_since_factor(&self, now: &[ContactState]) -> Option<usize> {
+        let Held::Secant(states) = &self.held else {
+            return None;
+        };
+        Some(states.iter().zip(now).filter(|(a, b)| a != b).count())
+    }
+
+    /// The secant correction K_s⁻¹ r by the held secant factorization corrected exactly
+    /// for the contacts that changed state since it was computed
+    /// ([`LinearBackend::solve_changed`]: the Woodbury identity inside the factor, no
+    /// iteration), when between 1 and [`LOW_RANK_MAX_CHANGES`] did (`kbuf` holds the new
+    /// K_s). Within an increment the iteration matrix changes only by those contacts'
+    /// stiffness (it is assembled on the last converged geometry, see
+    /// [`Driver::correction`]); across increments every entry changes and the backend
+    /// refuses after reading a few of them. `None`: the backend refused (unsupported, a
+    /// rank above its limit, a new geometry, K_s not positive definite) or the result's
+    /// true residual is above 10 × [`REUSE_TOLERANCE`]; then [`Driver::reuse`] or a
+    /// refactorization.
+    fn changed(&mut self, now: &[ContactState], r: &[f64]) -> Option<Vec<f64>> {
+        let changed = self.changed_since_factor(now)?;
+        if changed == 0 || changed > LOW_RANK_MAX_CHANGES {
+            return None;
+        }
+        let out = crate::solve::reuse::solve_changed(
+            &self.kbuf,
+            &mut *self.backend,
+            r,
+            10.0 * REUSE_TOLERANCE,
+        )?;
+        self.stats.low_rank_corrections += 1;
+        let rank = self.backend.stats().last_changed_rank;
+        if super::tracing() {
+            eprintln!("  low-rank correction: {changed} contacts changed, rank {rank}");
+        }
+        self.stats.low_rank_max_rank = self.stats.low_rank_max_rank.max(rank);
         Some(out.x)
     }
 
@@ -705,11 +784,11 @@ impl<'a> Driver<'a> {
     /// preconditioner, when few contacts changed state since it was computed (`kbuf` holds
     /// the new K_s). `None`: refactorize.
     fn reuse(&mut self, now: &[ContactState], r: &[f64]) -> Option<Vec<f64>> {
-        let Held::Secant(states) = &self.held else {
-            return None;
-        };
-        let changed = states.iter().zip(now).filter(|(a, b)| a != b).count();
+        let changed = self.changed_since_factor(now)?;
         if changed > REUSE_MAX_CHANGES {
+            if super::tracing() {
+                eprintln!("  refactorization: {changed} contacts changed");
+            }
             return None;
         }
         let out = crate::solve::reuse::solve_with_factor(
@@ -718,7 +797,14 @@ impl<'a> Driver<'a> {
             r,
             REUSE_TOLERANCE,
             REUSE_MAX_ITERATIONS,
-        )?;
+        );
+        if super::tracing() {
+            eprintln!(
+                "  PCG on the held factor: {changed} contacts changed, {:?} iterations",
+                out.as_ref().map(|o| o.iterations)
+            );
+        }
+        let out = out?;
         self.stats.reused_factorizations += 1;
         self.stats.reuse_iterations += out.iterations;
         Some(out.x)

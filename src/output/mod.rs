@@ -115,6 +115,8 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "contact_topologies": s.contact_topologies,
             "reused_factorizations": s.reused_factorizations,
             "reuse_iterations": s.reuse_iterations,
+            "low_rank_corrections": s.low_rank_corrections,
+            "low_rank_max_rank": s.low_rank_max_rank,
             "tangent_fallbacks": s.tangent_fallbacks,
             "free_motions": s.free_motions,
             "impact_cuts": s.impact_cuts,

@@ -94,6 +94,28 @@ pub fn solve_with_factor(
     None
 }
 
+/// Solve `k · x = r` with `backend.solve_changed` (the held factorization of a nearby
+/// matrix corrected exactly for the change, [`LinearBackend::solve_changed`]: no
+/// iteration), the result confirmed by its true residual ‖r − K x‖₂ ≤ `tolerance` ‖r‖₂ as
+/// those of [`solve_with_factor`] are. `None` when the backend refuses (unsupported, a
+/// change of too high a rank, K not positive definite) or the residual is above: the
+/// caller iterates or refactorizes.
+pub fn solve_changed(
+    k: &CsrMatrix,
+    backend: &mut dyn LinearBackend,
+    r: &[f64],
+    tolerance: f64,
+) -> Option<Reused> {
+    let bnorm = dot(r, r).sqrt();
+    if bnorm == 0.0 {
+        return Some(Reused::zero(r.len()));
+    }
+    let mut x = r.to_vec();
+    backend.solve_changed(k, &mut x).ok()?;
+    let mut scratch = vec![0.0; r.len()];
+    confirmed(k, x, r, tolerance * bnorm, &mut scratch, 0)
+}
+
 /// `x` after `iterations` iterations of [`solve_with_factor`] or [`gmres_with_factor`]
 /// when its true residual ‖r − K x‖₂ is within `limit` (the callers give 10 × the
 /// tolerance their own estimate met: the factor allows for its round-off drift) and it is
@@ -135,6 +157,40 @@ pub fn gmres_with_factor(
     tolerance: f64,
     max_iterations: usize,
 ) -> Option<Reused> {
+    gmres(k, &mut |z| backend.solve(z), r, tolerance, max_iterations)
+}
+
+/// [`gmres_with_factor`] right-preconditioned with the held factorization corrected for
+/// a low-rank change: M⁻¹ z = `near`⁻¹ z by `backend.solve_changed(near, z)`
+/// ([`LinearBackend::solve_changed`]; `near`: the symmetric matrix nearby, e.g. the secant
+/// stiffness in the current contact states, when the backend holds the factorization of
+/// that of older ones). `None` also when the backend refuses the change.
+pub fn gmres_with_changed_factor(
+    k: &CsrMatrix,
+    near: &CsrMatrix,
+    backend: &mut dyn LinearBackend,
+    r: &[f64],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Option<Reused> {
+    gmres(
+        k,
+        &mut |z| backend.solve_changed(near, z),
+        r,
+        tolerance,
+        max_iterations,
+    )
+}
+
+/// The GMRES of [`gmres_with_factor`] with the preconditioner solve `precondition`
+/// (z ← M⁻¹ z in place).
+fn gmres(
+    k: &CsrMatrix,
+    precondition: &mut dyn FnMut(&mut [f64]) -> Result<(), dfem_kernels::SolveError>,
+    r: &[f64],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Option<Reused> {
     let n = r.len();
     let beta = sdot(r, r).sqrt();
     if beta == 0.0 {
@@ -149,7 +205,7 @@ pub fn gmres_with_factor(
     let mut w = vec![0.0; n];
     for j in 0..max_iterations {
         let mut zj = v[j].clone();
-        backend.solve(&mut zj).ok()?;
+        precondition(&mut zj).ok()?;
         k.mul_vec(&zj, &mut w);
         z.push(zj);
         let mut hj = vec![0.0; j + 2];

@@ -60,6 +60,10 @@ pub struct Stats {
     pub low_rank_corrections: usize,
     /// Largest rank of those changes (signed rank-one terms; ≤ 2 per changed contact).
     pub low_rank_max_rank: usize,
+    /// Tangent corrections of the secant strategy that GMRES did not solve and whose LU
+    /// factorization would have been too large (`TANGENT_LU_MAX_ENTRIES` in
+    /// src/analysis/statics.rs): the secant correction was taken instead.
+    pub tangent_lu_skipped: usize,
     /// Increments of the secant strategy that went on with tangent (Newton) steps after
     /// the secant iterations stalled.
     pub tangent_fallbacks: usize,

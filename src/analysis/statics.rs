@@ -345,6 +345,14 @@ const UPDATE_MAX_SHARE: usize = 32;
 /// Cholesky factorizations of the secant matrix, or 40 preconditioned iterations, on the
 /// P2 wall of docs/performance.md.
 const TANGENT_MAX_ITERATIONS: usize = 30;
+/// A tangent correction of the secant strategy that GMRES on the secant factorization did
+/// not solve is solved with an LU factorization of the tangent only when the held Cholesky
+/// factor has at most this many entries; above, the secant correction is taken instead.
+/// On the rigid 10⁶-unknown wall of docs/performance.md (Cholesky factor 1.66·10⁸
+/// entries, 1.3 GB) the LU raised the resident memory from 5.6 to 11.6 GB and failed; on
+/// the 10⁵-unknown wall (1.28·10⁷ entries) it fits in well under 1 GB. 5·10⁷ Cholesky
+/// entries (0.4 GB) lets an LU of up to about 4× that (2.4 GB with its indices) through.
+const TANGENT_LU_MAX_ENTRIES: usize = 50_000_000;
 /// The loosest relative residual of a tangent correction by GMRES.
 const TANGENT_TOLERANCE: f64 = 1e-3;
 /// Conjugate-gradient iterations after which the reused factorization stops paying and the
@@ -596,10 +604,16 @@ impl<'a> Driver<'a> {
         match self.settings.strategy {
             Strategy::Initial => Ok(self.solve_k0(&mut x)?.then_some(x)),
             Strategy::Secant | Strategy::Newton => {
-                let newton = self.settings.strategy == Strategy::Newton || tangent;
+                let mut newton = self.settings.strategy == Strategy::Newton || tangent;
                 if newton && self.settings.strategy == Strategy::Secant {
                     if let Some(x) = self.tangent_with_secant_factor(trial, states, r) {
                         return Ok(Some(x));
+                    }
+                    // no LU of the tangent where its factor would not fit: the secant
+                    // correction instead (the safeguard's alternative step)
+                    newton = !self.tangent_lu_too_large();
+                    if !newton {
+                        self.stats.tangent_lu_skipped += 1;
                     }
                 }
                 let local = self.local_stiffness(trial, states, newton);
@@ -632,6 +646,22 @@ impl<'a> Driver<'a> {
                 Ok((ok && !huge).then_some(x))
             }
         }
+    }
+
+    /// Whether an LU factorization of the tangent would exceed
+    /// [`TANGENT_LU_MAX_ENTRIES`], estimated from the held Cholesky factor's entries
+    /// (`SolverStats::factor_nnz`; an LU of the same matrix holds L and U with pivoting's
+    /// extra fill, several times as many) or, for a backend that does not report them
+    /// (iterative ones), from the matrix's stored entries × 8 (the ratio of the
+    /// Cholesky factor's entries to the matrix's on the walls of docs/performance.md).
+    /// The size of the model alone decides, never the machine's free memory, so that the
+    /// results do not depend on the machine.
+    fn tangent_lu_too_large(&self) -> bool {
+        let factor = match self.backend.stats().factor_nnz {
+            0 => 8 * self.kbuf.values.len(),
+            f => f,
+        };
+        factor > TANGENT_LU_MAX_ENTRIES
     }
 
     /// Assemble the iteration matrix for the contacts' local stiffnesses `local` into
@@ -691,9 +721,7 @@ impl<'a> Driver<'a> {
             Some(c) if c > 0 && c <= LOW_RANK_MAX_CHANGES => {
                 let local = self.local_stiffness(trial, states, false);
                 self.assemble_kbuf(local);
-                let mut z = r.to_vec();
-                let ok = self.backend.solve_changed(&self.kbuf, &mut z).is_ok();
-                ok.then(|| self.kbuf.clone())
+                Some(self.kbuf.clone())
             }
             _ => None,
         };
@@ -706,7 +734,7 @@ impl<'a> Driver<'a> {
         let rn = Self::norm(r);
         let tolerance =
             (0.1 * self.converged_norm / rn.max(1e-300)).clamp(REUSE_TOLERANCE, TANGENT_TOLERANCE);
-        let out = match &near {
+        let (out, corrected) = match &near {
             Some(near) => crate::solve::reuse::gmres_with_changed_factor(
                 &self.kbuf,
                 near,
@@ -715,14 +743,18 @@ impl<'a> Driver<'a> {
                 tolerance,
                 TANGENT_MAX_ITERATIONS,
             ),
-            None => crate::solve::reuse::gmres_with_factor(
-                &self.kbuf,
-                &mut *self.backend,
-                r,
-                tolerance,
-                TANGENT_MAX_ITERATIONS,
+            None => (
+                crate::solve::reuse::gmres_with_factor(
+                    &self.kbuf,
+                    &mut *self.backend,
+                    r,
+                    tolerance,
+                    TANGENT_MAX_ITERATIONS,
+                ),
+                false,
             ),
-        }?;
+        };
+        let out = out?;
         // a step of the size of the model: K_t singular up to round-off, as in `correction`
         let size = self.model_size();
         if out.x.iter().any(|v| v.abs() > 0.1 * size) {
@@ -732,9 +764,8 @@ impl<'a> Driver<'a> {
         self.stats.reuse_iterations += out.iterations;
         if super::tracing() {
             eprintln!(
-                "  tangent by GMRES: {} iterations (corrected preconditioner: {})",
-                out.iterations,
-                near.is_some()
+                "  tangent by GMRES: {} iterations (corrected preconditioner: {corrected})",
+                out.iterations
             );
         }
         Some(out.x)

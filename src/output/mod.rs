@@ -117,6 +117,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "reuse_iterations": s.reuse_iterations,
             "low_rank_corrections": s.low_rank_corrections,
             "low_rank_max_rank": s.low_rank_max_rank,
+            "tangent_lu_skipped": s.tangent_lu_skipped,
             "tangent_fallbacks": s.tangent_fallbacks,
             "free_motions": s.free_motions,
             "impact_cuts": s.impact_cuts,

@@ -330,7 +330,12 @@ enum Held {
 /// plus three for the change of geometry (measured on the 30×30 wall of
 /// docs/performance.md: 0 changes → 3 iterations, 5–9 → 6–10, 20–24 → 18–25), while one
 /// iteration (a solve pair and a product with K) costs a tenth to a twentieth of a numeric
-/// factorization on the walls of docs/performance.md.
+/// factorization on the walls of docs/performance.md. Since the low-rank path
+/// ([`Driver::changed`]) takes the changes on an unchanged geometry, this applies to the
+/// first correction of an increment (a new geometry: the held factorization is then a
+/// preconditioner only) and to changes the backend refused; on the P2 walls the other
+/// first corrections come after 8–2,500 changes (5 of the deformable wall's 35 take
+/// conjugate gradients, none of the rigid wall's), so the limit was left as it was.
 const REUSE_MAX_CHANGES: usize = 4;
 /// The iteration matrix is updated ([`System::stiffness_update`]) rather than assembled
 /// again when at most 1/`UPDATE_MAX_SHARE` of the contacts changed their local stiffness:
@@ -360,9 +365,12 @@ const TANGENT_TOLERANCE: f64 = 1e-3;
 const REUSE_MAX_ITERATIONS: usize = 8;
 /// A secant correction is solved with the held factorization corrected for the change
 /// ([`Driver::changed`]) when at most this many contacts changed state since it was
-/// computed (each a change of rank ≤ 2); the backend's own rank limit
-/// (`dfem_kernels::faer_backend::CHANGED_MAX_RANK`) refuses the larger changes.
-const LOW_RANK_MAX_CHANGES: usize = 64;
+/// computed (each a change of rank ≤ 2, so up to the backend's own rank limit,
+/// `dfem_kernels::faer_backend::CHANGED_MAX_RANK` = 256, which refuses the larger
+/// changes). On the P2 walls of docs/performance.md the changes within an increment stay
+/// below 66 contacts (rank ≤ 66), on the 10⁵-unknown rigid wall they reach 120 (rank
+/// 116): with a limit of 64 contacts that iteration refactorized.
+const LOW_RANK_MAX_CHANGES: usize = 128;
 /// Relative residual of a correction computed with a reused factorization: far below the
 /// out-of-balance tolerances (≥ 1e-8), so the iterations see no difference.
 const REUSE_TOLERANCE: f64 = 1e-10;

@@ -498,12 +498,12 @@ pub struct FaerCholesky(CholeskyCore, LowRankCorrection);
 /// Default rank limit of [`FaerCholesky`]'s `solve_changed`: a correction of rank r costs
 /// about 0.18–0.32 of a numeric refactorization at r = 18–45, 0.34–0.44 at r = 180 and
 /// 0.73–1.03 at r = 449 on the 100 × 100 deformable wall (docs/performance.md, "The exact
-/// correction through the held factor"), against about 1.15 for a refactorization and a
-/// solve; on larger models a refactorization costs relatively more (0.14 of one at rank
-/// 18–46 on the 10⁵-unknown rigid wall, docs/performance.md, "The low-rank correction in
-/// the static driver"). 256 keeps a correction below about half a refactorization on
-/// the 10⁴-block wall.
-pub const CHANGED_MAX_RANK: usize = 256;
+/// correction through the held factor"), but relatively more on a smaller model: in the
+/// static driver on the rigid P2 wall (4,860 unknowns) 0.29 of a refactorization with
+/// this limit (ranks ≤ 66), 0.80 with a limit of 256 (ranks ≤ 108: the held factor is
+/// kept longer and the change grows), and on the 10⁵-unknown rigid wall 0.14 at ranks
+/// 18–46 (docs/performance.md, "The low-rank correction in the static driver").
+pub const CHANGED_MAX_RANK: usize = 128;
 
 /// Sparse LDLᵀ without pivoting (faer). Negative pivots are accepted (indefinite
 /// matrices without a zero leading minor still factor); an exactly zero pivot gives

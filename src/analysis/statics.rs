@@ -366,11 +366,12 @@ const REUSE_MAX_ITERATIONS: usize = 8;
 /// A secant correction is solved with the held factorization corrected for the change
 /// ([`Driver::changed`]) when at most this many contacts changed state since it was
 /// computed (each a change of rank ≤ 2, so up to the backend's own rank limit,
-/// `dfem_kernels::faer_backend::CHANGED_MAX_RANK` = 256, which refuses the larger
-/// changes). On the P2 walls of docs/performance.md the changes within an increment stay
-/// below 66 contacts (rank ≤ 66), on the 10⁵-unknown rigid wall they reach 120 (rank
-/// 116): with a limit of 64 contacts that iteration refactorized.
-const LOW_RANK_MAX_CHANGES: usize = 128;
+/// `dfem_kernels::faer_backend::CHANGED_MAX_RANK` = 128, which refuses the larger
+/// changes). Measured on the rigid P2 wall of docs/performance.md: with 64 (and rank
+/// 128) the corrections change a median 22 contacts and cost 0.29 of a refactorization;
+/// with 128 (and rank 256) the held factor is kept longer, the corrections change a
+/// median 55 contacts and cost 0.80 of one, for 39 factorizations instead of 47.
+const LOW_RANK_MAX_CHANGES: usize = 64;
 /// Relative residual of a correction computed with a reused factorization: far below the
 /// out-of-balance tolerances (≥ 1e-8), so the iterations see no difference.
 const REUSE_TOLERANCE: f64 = 1e-10;
@@ -804,6 +805,7 @@ impl<'a> Driver<'a> {
         if changed == 0 || changed > LOW_RANK_MAX_CHANGES {
             return None;
         }
+        let start = std::time::Instant::now();
         let out = crate::solve::reuse::solve_changed(
             &self.kbuf,
             &mut *self.backend,
@@ -813,7 +815,10 @@ impl<'a> Driver<'a> {
         self.stats.low_rank_corrections += 1;
         let rank = self.backend.stats().last_changed_rank;
         if super::tracing() {
-            eprintln!("  low-rank correction: {changed} contacts changed, rank {rank}");
+            eprintln!(
+                "  low-rank correction: {changed} contacts changed, rank {rank}, {:.3e} s",
+                start.elapsed().as_secs_f64()
+            );
         }
         self.stats.low_rank_max_rank = self.stats.low_rank_max_rank.max(rank);
         Some(out.x)

@@ -61,7 +61,7 @@ use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
 use faer::sparse::linalg::triangular_solve as sparse_tri;
 use faer::sparse::SparseColMatRef;
-use faer::{Accum, Conj, Mat, MatMut, MatRef, Par, Side};
+use faer::{Accum, Conj, Mat, MatMut, MatRef, Par};
 use std::time::Instant;
 
 /// Eigenvalues of a block of ΔK below this fraction of its largest are dropped.
@@ -344,11 +344,9 @@ impl LowRankCorrection {
         self.c_vectors.clear();
         self.c_inv_values.clear();
         if r > 0 {
-            let eig = c.self_adjoint_eigen(Side::Lower).map_err(|e| {
+            let (lam, u) = symmetric_eigen(c.as_ref()).map_err(|e| {
                 SolveError::Other(format!("low-rank correction: eigensolver: {e:?}"))
             })?;
-            let lam = eig.S().column_vector();
-            let u = eig.U();
             // C = S + WᵀW with S = diag(±1): its scale is at least 1
             let big = (0..r).map(|i| lam[i].abs()).fold(1.0, f64::max);
             let negative_terms = self.signs.iter().filter(|&&s| s < 0.0).count();
@@ -507,6 +505,33 @@ fn substitute(
     }
 }
 
+/// Eigenvalues (ascending) and eigenvectors (the columns) of the symmetric `a` (its lower
+/// triangle read), computed sequentially: faer's `self_adjoint_eigen` runs on faer's
+/// global parallelism, whose results change with the number of threads.
+fn symmetric_eigen(
+    a: MatRef<'_, f64>,
+) -> Result<(Vec<f64>, Mat<f64>), faer::linalg::evd::EvdError> {
+    use faer::linalg::evd::{self_adjoint_evd, self_adjoint_evd_scratch, ComputeEigenvectors};
+    let n = a.nrows();
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    let mut u = Mat::<f64>::zeros(n, n);
+    let mut mem = MemBuffer::new(self_adjoint_evd_scratch::<f64>(
+        n,
+        ComputeEigenvectors::Yes,
+        Par::Seq,
+        Default::default(),
+    ));
+    self_adjoint_evd(
+        a,
+        s.as_mut(),
+        Some(u.as_mut()),
+        Par::Seq,
+        MemStack::new(&mut mem),
+        Default::default(),
+    )?;
+    Ok(((0..n).map(|i| s[i]).collect(), u))
+}
+
 /// The signed rank-one terms of one connected block of ΔK.
 struct Terms {
     /// Its unknowns (original numbering), ascending.
@@ -603,7 +628,7 @@ fn split_change(
         .zip(dense)
         .map(|(unknowns, d)| {
             let q = unknowns.len();
-            let eig = d.self_adjoint_eigen(Side::Lower).map_err(|e| {
+            let (lam, u) = symmetric_eigen(d.as_ref()).map_err(|e| {
                 SolveError::Other(format!(
                     "low-rank correction: no eigendecomposition of the change at unknowns {unknowns:?}: {e:?}"
                 ))
@@ -613,12 +638,11 @@ fn split_change(
                 vectors: Vec::new(),
                 signs: Vec::new(),
             };
-            let lam = eig.S().column_vector();
             let big = (0..q).map(|i| lam[i].abs()).fold(0.0, f64::max);
             for t in 0..q {
                 if lam[t].abs() > DROP * big {
                     let s = lam[t].abs().sqrt();
-                    out.vectors.extend((0..q).map(|i| s * eig.U()[(i, t)]));
+                    out.vectors.extend((0..q).map(|i| s * u[(i, t)]));
                     out.signs.push(lam[t].signum());
                 }
             }

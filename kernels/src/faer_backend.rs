@@ -499,10 +499,11 @@ pub struct FaerCholesky(CholeskyCore, LowRankCorrection);
 /// about 0.18–0.32 of a numeric refactorization at r = 18–45, 0.34–0.44 at r = 180 and
 /// 0.73–1.03 at r = 449 on the 100 × 100 deformable wall (docs/performance.md, "The exact
 /// correction through the held factor"), but relatively more on a smaller model: in the
-/// static driver on the rigid P2 wall (4,860 unknowns) 0.29 of a refactorization with
+/// static driver on the rigid P2 wall (4,860 unknowns) 0.45 of a refactorization with
 /// this limit (ranks ≤ 66), 0.80 with a limit of 256 (ranks ≤ 108: the held factor is
-/// kept longer and the change grows), and on the 10⁵-unknown rigid wall 0.14 at ranks
-/// 18–46 (docs/performance.md, "The low-rank correction in the static driver").
+/// kept longer and the change grows; both timed in one window), and on the 10⁵-unknown
+/// rigid wall 0.14–0.17 at ranks 18–46 (docs/performance.md, "The low-rank correction in
+/// the static driver").
 pub const CHANGED_MAX_RANK: usize = 128;
 
 /// Sparse LDLᵀ without pivoting (faer). Negative pivots are accepted (indefinite

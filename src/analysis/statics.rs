@@ -367,10 +367,11 @@ const REUSE_MAX_ITERATIONS: usize = 8;
 /// ([`Driver::changed`]) when at most this many contacts changed state since it was
 /// computed (each a change of rank ≤ 2, so up to the backend's own rank limit,
 /// `dfem_kernels::faer_backend::CHANGED_MAX_RANK` = 128, which refuses the larger
-/// changes). Measured on the rigid P2 wall of docs/performance.md: with 64 (and rank
-/// 128) the corrections change a median 22 contacts and cost 0.29 of a refactorization;
-/// with 128 (and rank 256) the held factor is kept longer, the corrections change a
-/// median 55 contacts and cost 0.80 of one, for 39 factorizations instead of 47.
+/// changes). Measured on the rigid P2 wall of docs/performance.md (each correction timed
+/// in the driver, one window): with 64 (and rank 128) the corrections change a median 22
+/// contacts and cost 0.45 of a refactorization; with 128 (and rank 256) the held factor
+/// is kept longer, the corrections change a median 55 contacts and cost 0.80 of one,
+/// for 39 factorizations instead of 47.
 const LOW_RANK_MAX_CHANGES: usize = 64;
 /// Relative residual of a correction computed with a reused factorization: far below the
 /// out-of-balance tolerances (≥ 1e-8), so the iterations see no difference.

@@ -31,6 +31,15 @@ pub enum SolveError {
         /// Final relative residual ‖b − A x‖ / ‖b‖.
         residual: f64,
     },
+    /// The backend does not offer this operation (e.g.
+    /// [`LinearBackend::solve_changed`]); the caller takes another way.
+    #[error("the linear backend '{backend}' does not support {operation}")]
+    Unsupported {
+        /// The backend's name.
+        backend: &'static str,
+        /// What was asked of it.
+        operation: &'static str,
+    },
     /// Anything else (wrong sizes, solve before factorize, index overflow, ...).
     #[error("{0}")]
     Other(String),
@@ -84,6 +93,16 @@ pub struct SolverStats {
     /// Memory held by the factor or preconditioner of the last factorization, bytes, as
     /// reported by the backend; 0 when it does not report it (then see `factor_nnz`).
     pub memory_bytes: usize,
+    /// Successful calls to [`LinearBackend::solve_changed`] (0 for the backends that do
+    /// not support it).
+    pub changed_solves: usize,
+    /// Rank of the change of the last successful [`LinearBackend::solve_changed`] (the
+    /// signed rank-one terms of K_new − K_old it corrected for).
+    pub last_changed_rank: usize,
+    /// Largest rank among the successful [`LinearBackend::solve_changed`] calls.
+    pub max_changed_rank: usize,
+    /// Wall time spent in [`LinearBackend::solve_changed`] (successful or not), seconds.
+    pub changed_seconds: f64,
 }
 
 /// A sparse linear solver: symbolic analysis once per pattern, numeric factorization
@@ -101,6 +120,22 @@ pub trait LinearBackend: Send {
     fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError>;
     /// Counters and timers.
     fn stats(&self) -> &SolverStats;
+    /// Solve `a` x = rhs in place, `a` on the pattern of the last factorized matrix and
+    /// differing from it by a change of low rank (a secant iteration of METHOD.md §4 in
+    /// which a few contacts changed state: ΔK = Σ over them of Bᵀ Δk B, METHOD.md §3),
+    /// without refactorizing: the held factorization stays that of the old matrix and
+    /// serves the next call too. Exact up to round-off (not an iteration). Errors when the
+    /// change is too large to pay (every entry changed, a rank above the backend's cap),
+    /// when `a` is not positive definite ([`SolveError::NotPositiveDefinite`]), when no
+    /// factorization is held; the default is [`SolveError::Unsupported`]. On any error
+    /// the caller refactorizes (or iterates with the held factor as a preconditioner);
+    /// `rhs` is then unspecified.
+    fn solve_changed(&mut self, _a: &CsrMatrix, _rhs: &mut [f64]) -> Result<(), SolveError> {
+        Err(SolveError::Unsupported {
+            backend: self.name(),
+            operation: "solves with a changed matrix (solve_changed)",
+        })
+    }
     /// Near-null space of the matrices to come: for elasticity of blocky structures, the
     /// rigid-body modes (METHOD.md §2: two translations and the rotation about each
     /// block's centroid, restricted to that block's unknowns), as dense vectors of length n.

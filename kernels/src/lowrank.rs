@@ -61,13 +61,24 @@ use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
 use faer::sparse::linalg::triangular_solve as sparse_tri;
 use faer::sparse::SparseColMatRef;
-use faer::{Accum, Conj, Mat, MatMut, MatRef, Par, Side};
+use faer::{Accum, Conj, Mat, MatMut, MatRef, Par};
 use std::time::Instant;
 
 /// Eigenvalues of a block of ΔK below this fraction of its largest are dropped.
 const DROP: f64 = 1e-13;
 /// An eigenvalue of C below this fraction of its largest reports a (nearly) singular K_new.
 const SINGULAR: f64 = 1e-9;
+/// With a rank limit r ([`LowRankCorrection::with_max_rank`]), a change with more than
+/// `ENTRIES_PER_RANK` × r nonzero entries is refused as soon as the scan of ΔK meets them
+/// (before any block is formed): a contact's Bᵀ Δk B has rank ≤ 2 and at most 8 × 8
+/// entries (two nodes of two unknowns on each face, METHOD.md §3), 32 entries per unit of
+/// rank, so this leaves a factor 2 while refusing a change of every entry (a new
+/// geometry) after reading about 64 r of them.
+const ENTRIES_PER_RANK: usize = 64;
+/// With a rank limit r, a connected block of ΔK on more than `UNKNOWNS_PER_RANK` × r
+/// unknowns is refused before its dense eigendecomposition (q³ work): a contact adds at
+/// most 8 unknowns and rank ≥ 1 when it changed.
+const UNKNOWNS_PER_RANK: usize = 8;
 const NONE: usize = usize::MAX;
 
 /// The elimination tree of the held factor's supernodes (columns for a simplicial one).
@@ -242,6 +253,8 @@ pub struct LowRankCorrection {
     c_inv_values: Vec<f64>,
     max_rank: Option<usize>,
     stats: LowRankStats,
+    /// K_new's values at the last successful update (for [`LowRankCorrection::solve_changed`]).
+    new_values: Vec<f64>,
 }
 
 impl LowRankCorrection {
@@ -291,7 +304,10 @@ impl LowRankCorrection {
             self.tree = Some(Tree::new(factor)?);
         }
         let tree = self.tree.as_ref().expect("tree");
-        let mut terms = split_change(k_new, &an.last_values)?;
+        let limits = self
+            .max_rank
+            .map(|r| (ENTRIES_PER_RANK * r.max(1), UNKNOWNS_PER_RANK * r.max(1)));
+        let mut terms = split_change(k_new, &an.last_values, limits)?;
         terms.retain(|b| !b.signs.is_empty());
         let rank: usize = terms.iter().map(|b| b.signs.len()).sum();
         if let Some(max) = self.max_rank {
@@ -328,11 +344,9 @@ impl LowRankCorrection {
         self.c_vectors.clear();
         self.c_inv_values.clear();
         if r > 0 {
-            let eig = c.self_adjoint_eigen(Side::Lower).map_err(|e| {
+            let (lam, u) = symmetric_eigen(c.as_ref()).map_err(|e| {
                 SolveError::Other(format!("low-rank correction: eigensolver: {e:?}"))
             })?;
-            let lam = eig.S().column_vector();
-            let u = eig.U();
             // C = S + WᵀW with S = diag(±1): its scale is at least 1
             let big = (0..r).map(|i| lam[i].abs()).fold(1.0, f64::max);
             let negative_terms = self.signs.iter().filter(|&&s| s < 0.0).count();
@@ -372,7 +386,30 @@ impl LowRankCorrection {
             solve_seconds: 0.0,
         };
         self.factor_id = Some((an.pattern.id(), factor.stats().numeric_factorizations));
+        self.new_values.clone_from(&k_new.values);
         Ok(())
+    }
+
+    /// rhs ← K_new⁻¹ rhs: [`update`](Self::update) for `k_new` unless the last successful
+    /// one was made for the same values and the same held factorization (several solves
+    /// with one K_new), then [`solve`](Self::solve). The work of
+    /// [`FaerCholesky`]'s `LinearBackend::solve_changed`.
+    pub fn solve_changed(
+        &mut self,
+        factor: &FaerCholesky,
+        k_new: &CsrMatrix,
+        rhs: &mut [f64],
+    ) -> Result<(), SolveError> {
+        let current = held(factor)
+            .map(|an| (an.pattern.id(), factor.stats().numeric_factorizations))
+            .ok();
+        let fresh = current.is_some()
+            && self.factor_id == current
+            && crate::backend::same_bits(&self.new_values, &k_new.values);
+        if !fresh {
+            self.update(factor, k_new)?;
+        }
+        self.solve(factor, rhs)
     }
 
     /// rhs ← K_new⁻¹ rhs for the K_new of the last successful [`update`](Self::update),
@@ -468,6 +505,33 @@ fn substitute(
     }
 }
 
+/// Eigenvalues (ascending) and eigenvectors (the columns) of the symmetric `a` (its lower
+/// triangle read), computed sequentially: faer's `self_adjoint_eigen` runs on faer's
+/// global parallelism, whose results change with the number of threads.
+fn symmetric_eigen(
+    a: MatRef<'_, f64>,
+) -> Result<(Vec<f64>, Mat<f64>), faer::linalg::evd::EvdError> {
+    use faer::linalg::evd::{self_adjoint_evd, self_adjoint_evd_scratch, ComputeEigenvectors};
+    let n = a.nrows();
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    let mut u = Mat::<f64>::zeros(n, n);
+    let mut mem = MemBuffer::new(self_adjoint_evd_scratch::<f64>(
+        n,
+        ComputeEigenvectors::Yes,
+        Par::Seq,
+        Default::default(),
+    ));
+    self_adjoint_evd(
+        a,
+        s.as_mut(),
+        Some(u.as_mut()),
+        Par::Seq,
+        MemStack::new(&mut mem),
+        Default::default(),
+    )?;
+    Ok(((0..n).map(|i| s[i]).collect(), u))
+}
+
 /// The signed rank-one terms of one connected block of ΔK.
 struct Terms {
     /// Its unknowns (original numbering), ascending.
@@ -479,7 +543,14 @@ struct Terms {
 
 /// ΔK = values of `k_new` − `old`, split into connected blocks and each block into signed
 /// rank-one terms by its eigendecomposition.
-fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Result<Vec<Terms>, SolveError> {
+/// `limits`: the largest number of changed entries and of unknowns in one block (refused
+/// with an error as soon as exceeded).
+fn split_change(
+    k_new: &CsrMatrix,
+    old: &[f64],
+    limits: Option<(usize, usize)>,
+) -> Result<Vec<Terms>, SolveError> {
+    let (max_entries, max_block) = limits.unwrap_or((usize::MAX, usize::MAX));
     let p = &k_new.pattern;
     let n = p.n();
     let (rp, ci) = (p.row_ptr(), p.col_idx());
@@ -494,6 +565,11 @@ fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Result<Vec<Terms>, SolveError
                 )));
             }
             if d != 0.0 {
+                if changed.len() == max_entries {
+                    return Err(SolveError::Other(format!(
+                        "low-rank correction: more than {max_entries} entries changed (from row {i} on); refactorize"
+                    )));
+                }
                 changed.push((i, ci[e] as usize, d));
             }
         }
@@ -530,6 +606,13 @@ fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Result<Vec<Terms>, SolveError
         local[a] = blocks[block_of[a]].len();
         blocks[block_of[a]].push(unknowns[a]);
     }
+    if let Some(b) = blocks.iter().find(|b| b.len() > max_block) {
+        return Err(SolveError::Other(format!(
+            "low-rank correction: a connected change on {} unknowns (from unknown {}), above the limit {max_block}; refactorize",
+            b.len(),
+            b[0]
+        )));
+    }
     let mut dense: Vec<Mat<f64>> = blocks
         .iter()
         .map(|b| Mat::zeros(b.len(), b.len()))
@@ -545,7 +628,7 @@ fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Result<Vec<Terms>, SolveError
         .zip(dense)
         .map(|(unknowns, d)| {
             let q = unknowns.len();
-            let eig = d.self_adjoint_eigen(Side::Lower).map_err(|e| {
+            let (lam, u) = symmetric_eigen(d.as_ref()).map_err(|e| {
                 SolveError::Other(format!(
                     "low-rank correction: no eigendecomposition of the change at unknowns {unknowns:?}: {e:?}"
                 ))
@@ -555,12 +638,11 @@ fn split_change(k_new: &CsrMatrix, old: &[f64]) -> Result<Vec<Terms>, SolveError
                 vectors: Vec::new(),
                 signs: Vec::new(),
             };
-            let lam = eig.S().column_vector();
             let big = (0..q).map(|i| lam[i].abs()).fold(0.0, f64::max);
             for t in 0..q {
                 if lam[t].abs() > DROP * big {
                     let s = lam[t].abs().sqrt();
-                    out.vectors.extend((0..q).map(|i| s * eig.U()[(i, t)]));
+                    out.vectors.extend((0..q).map(|i| s * u[(i, t)]));
                     out.signs.push(lam[t].signum());
                 }
             }
@@ -987,5 +1069,103 @@ mod tests {
         let mut c = LowRankCorrection::new().with_max_rank(1);
         let err = c.update(&backend, &stiffness(n, &old, &new)).unwrap_err();
         assert!(err.to_string().contains("rank 2") && err.to_string().contains("refactorize"));
+    }
+
+    /// `LinearBackend::solve_changed` of `faer-cholesky` (through the trait object, as
+    /// the driver calls it): the grid's springs changed as in
+    /// [`against_a_fresh_factorization`] (rank 5) give faer's fresh solution of K_new to
+    /// the same 1e-9 (both carry cond(K)·ε ≈ 10⁻¹², see there) and count in the
+    /// backend's stats; the held factor still solves K_old (compared with a second
+    /// backend's factorization of K_old: bit-identical, the same factorization); a second
+    /// call with the same K_new reuses the update and gives the same bits.
+    #[test]
+    fn solve_changed_through_the_trait() {
+        let (n, old) = grid(20, 12);
+        let mut new = old.clone();
+        new[30].k = [0.0, 0.0];
+        new[101].k[0] *= 4.0;
+        new[250].k = [0.0, 0.0];
+        let (k_old, k_new) = (stiffness(n, &old, &old), stiffness(n, &old, &new));
+        let f = load(n);
+        for name in ["faer-cholesky", "faer-cholesky-metis"] {
+            let mut backend = crate::backend::backend_from_name(name).unwrap();
+            let mut x = f.clone();
+            assert!(
+                backend.solve_changed(&k_new, &mut x).is_err(),
+                "{name}: nothing factorized"
+            );
+            backend.factorize(&k_old).unwrap();
+            let mut x = f.clone();
+            backend.solve_changed(&k_new, &mut x).unwrap();
+            let mut fresh = crate::backend::backend_from_name(name).unwrap();
+            fresh.factorize(&k_new).unwrap();
+            let mut want = f.clone();
+            fresh.solve(&mut want).unwrap();
+            let diff = norm(x.iter().zip(&want).map(|(a, b)| a - b)) / norm(want.iter().copied());
+            assert!(diff < 1e-9, "{name}: relative difference {diff:e}");
+            let st = backend.stats();
+            assert_eq!(
+                (st.changed_solves, st.last_changed_rank, st.max_changed_rank),
+                (1, 5, 5),
+                "{name}"
+            );
+            assert_eq!(st.numeric_factorizations, 1, "{name}: no refactorization");
+            let mut again = f.clone();
+            backend.solve_changed(&k_new, &mut again).unwrap();
+            assert!(crate::backend::same_bits(&again, &x), "{name}");
+            let (mut a, mut b) = (f.clone(), f.clone());
+            backend.solve(&mut a).unwrap();
+            fresh.factorize(&k_old).unwrap();
+            fresh.solve(&mut b).unwrap();
+            assert!(crate::backend::same_bits(&a, &b), "{name}: the held factor");
+        }
+    }
+
+    /// A change of every entry (the matrix of a new geometry: all values × 1.001) is
+    /// refused after reading 64 × the rank limit of them, with an error naming the fix;
+    /// so is one connected change on more unknowns than 8 × the limit (a row of springs
+    /// along the grid all changed, one block of 2 × 20 unknowns, limit 2), before its
+    /// eigendecomposition; the backend then refactorizes as usual. Backends without the
+    /// path report `Unsupported`.
+    #[test]
+    fn solve_changed_refuses_what_does_not_pay() {
+        let (n, old) = grid(20, 12);
+        let k_old = stiffness(n, &old, &old);
+        let f = load(n);
+        let mut backend = FaerCholesky::new().with_changed_max_rank(2);
+        backend.factorize(&k_old).unwrap();
+        let mut scaled = k_old.clone();
+        scaled.values.iter_mut().for_each(|v| *v *= 1.001);
+        let err = backend.solve_changed(&scaled, &mut f.clone()).unwrap_err();
+        assert!(
+            err.to_string().contains("more than 128 entries changed")
+                && err.to_string().contains("refactorize"),
+            "{err}"
+        );
+        // the horizontal springs of the bottom row (nodes 0..20), stiffened: one block
+        let mut new = old.clone();
+        for s in new.iter_mut() {
+            if s.a < 19 && s.b == Some(s.a + 1) {
+                s.k[0] *= 2.0;
+            }
+        }
+        let err = backend
+            .solve_changed(&stiffness(n, &old, &new), &mut f.clone())
+            .unwrap_err();
+        assert!(err.to_string().contains("on 20 unknowns"), "{err}");
+        assert_eq!(backend.stats().changed_solves, 0);
+        backend.factorize(&scaled).unwrap();
+        let mut x = f.clone();
+        backend.solve(&mut x).unwrap();
+        assert!(residual(&scaled, &x, &f) < 1e-12);
+        for name in ["faer-ldlt", "faer-lu", "pcg", "faer-cholesky-split"] {
+            let mut other = crate::backend::backend_from_name(name).unwrap();
+            other.factorize(&k_old).unwrap();
+            let err = other.solve_changed(&scaled, &mut f.clone()).unwrap_err();
+            assert!(
+                matches!(err, SolveError::Unsupported { backend, .. } if backend == name),
+                "{name}: {err:?}"
+            );
+        }
     }
 }

@@ -53,6 +53,17 @@ pub struct Stats {
     pub reused_factorizations: usize,
     /// Conjugate-gradient and GMRES iterations of those corrections.
     pub reuse_iterations: usize,
+    /// Secant corrections solved with the held factorization corrected exactly for the
+    /// contacts that changed state since it was computed (a low-rank change,
+    /// `LinearBackend::solve_changed`), neither refactorized nor iterated; not counted in
+    /// `reused_factorizations`.
+    pub low_rank_corrections: usize,
+    /// Largest rank of those changes (signed rank-one terms; ≤ 2 per changed contact).
+    pub low_rank_max_rank: usize,
+    /// Tangent corrections of the secant strategy that GMRES did not solve and whose LU
+    /// factorization would have been too large (`TANGENT_LU_MAX_ENTRIES` in
+    /// src/analysis/statics.rs): the secant correction was taken instead.
+    pub tangent_lu_skipped: usize,
     /// Increments of the secant strategy that went on with tangent (Newton) steps after
     /// the secant iterations stalled.
     pub tangent_fallbacks: usize,

@@ -330,7 +330,12 @@ enum Held {
 /// plus three for the change of geometry (measured on the 30×30 wall of
 /// docs/performance.md: 0 changes → 3 iterations, 5–9 → 6–10, 20–24 → 18–25), while one
 /// iteration (a solve pair and a product with K) costs a tenth to a twentieth of a numeric
-/// factorization on the walls of docs/performance.md.
+/// factorization on the walls of docs/performance.md. Since the low-rank path
+/// ([`Driver::changed`]) takes the changes on an unchanged geometry, this applies to the
+/// first correction of an increment (a new geometry: the held factorization is then a
+/// preconditioner only) and to changes the backend refused; on the P2 walls the other
+/// first corrections come after 8–2,500 changes (5 of the deformable wall's 35 take
+/// conjugate gradients, none of the rigid wall's), so the limit was left as it was.
 const REUSE_MAX_CHANGES: usize = 4;
 /// The iteration matrix is updated ([`System::stiffness_update`]) rather than assembled
 /// again when at most 1/`UPDATE_MAX_SHARE` of the contacts changed their local stiffness:
@@ -345,11 +350,29 @@ const UPDATE_MAX_SHARE: usize = 32;
 /// Cholesky factorizations of the secant matrix, or 40 preconditioned iterations, on the
 /// P2 wall of docs/performance.md.
 const TANGENT_MAX_ITERATIONS: usize = 30;
+/// A tangent correction of the secant strategy that GMRES on the secant factorization did
+/// not solve is solved with an LU factorization of the tangent only when the held Cholesky
+/// factor has at most this many entries; above, the secant correction is taken instead.
+/// On the rigid 10⁶-unknown wall of docs/performance.md (Cholesky factor 1.66·10⁸
+/// entries, 1.3 GB) the LU raised the resident memory from 5.6 to 11.6 GB and failed; on
+/// the 10⁵-unknown wall (1.28·10⁷ entries) it fits in well under 1 GB. 5·10⁷ Cholesky
+/// entries (0.4 GB) lets an LU of up to about 4× that (2.4 GB with its indices) through.
+const TANGENT_LU_MAX_ENTRIES: usize = 50_000_000;
 /// The loosest relative residual of a tangent correction by GMRES.
 const TANGENT_TOLERANCE: f64 = 1e-3;
 /// Conjugate-gradient iterations after which the reused factorization stops paying and the
 /// secant matrix is refactorized.
 const REUSE_MAX_ITERATIONS: usize = 8;
+/// A secant correction is solved with the held factorization corrected for the change
+/// ([`Driver::changed`]) when at most this many contacts changed state since it was
+/// computed (each a change of rank ≤ 2, so up to the backend's own rank limit,
+/// `dfem_kernels::faer_backend::CHANGED_MAX_RANK` = 128, which refuses the larger
+/// changes). Measured on the rigid P2 wall of docs/performance.md (each correction timed
+/// in the driver, one window): with 64 (and rank 128) the corrections change a median 22
+/// contacts and cost 0.45 of a refactorization; with 128 (and rank 256) the held factor
+/// is kept longer, the corrections change a median 55 contacts and cost 0.80 of one,
+/// for 39 factorizations instead of 47.
+const LOW_RANK_MAX_CHANGES: usize = 64;
 /// Relative residual of a correction computed with a reused factorization: far below the
 /// out-of-balance tolerances (≥ 1e-8), so the iterations see no difference.
 const REUSE_TOLERANCE: f64 = 1e-10;
@@ -591,15 +614,24 @@ impl<'a> Driver<'a> {
         match self.settings.strategy {
             Strategy::Initial => Ok(self.solve_k0(&mut x)?.then_some(x)),
             Strategy::Secant | Strategy::Newton => {
-                let newton = self.settings.strategy == Strategy::Newton || tangent;
+                let mut newton = self.settings.strategy == Strategy::Newton || tangent;
                 if newton && self.settings.strategy == Strategy::Secant {
                     if let Some(x) = self.tangent_with_secant_factor(trial, states, r) {
                         return Ok(Some(x));
+                    }
+                    // no LU of the tangent where its factor would not fit: the secant
+                    // correction instead (the safeguard's alternative step)
+                    newton = !self.tangent_lu_too_large();
+                    if !newton {
+                        self.stats.tangent_lu_skipped += 1;
                     }
                 }
                 let local = self.local_stiffness(trial, states, newton);
                 self.assemble_kbuf(local);
                 if !newton {
+                    if let Some(x) = self.changed(states, r) {
+                        return Ok(Some(x));
+                    }
                     if let Some(x) = self.reuse(states, r) {
                         return Ok(Some(x));
                     }
@@ -624,6 +656,22 @@ impl<'a> Driver<'a> {
                 Ok((ok && !huge).then_some(x))
             }
         }
+    }
+
+    /// Whether an LU factorization of the tangent would exceed
+    /// [`TANGENT_LU_MAX_ENTRIES`], estimated from the held Cholesky factor's entries
+    /// (`SolverStats::factor_nnz`; an LU of the same matrix holds L and U with pivoting's
+    /// extra fill, several times as many) or, for a backend that does not report them
+    /// (iterative ones), from the matrix's stored entries × 8 (the ratio of the
+    /// Cholesky factor's entries to the matrix's on the walls of docs/performance.md).
+    /// The size of the model alone decides, never the machine's free memory, so that the
+    /// results do not depend on the machine.
+    fn tangent_lu_too_large(&self) -> bool {
+        let factor = match self.backend.stats().factor_nnz {
+            0 => 8 * self.kbuf.values.len(),
+            f => f,
+        };
+        factor > TANGENT_LU_MAX_ENTRIES
     }
 
     /// Assemble the iteration matrix for the contacts' local stiffnesses `local` into
@@ -675,6 +723,18 @@ impl<'a> Driver<'a> {
             }
             self.held = Held::Secant(states.to_vec());
         }
+        // the secant matrix in `states`, when the held factorization is of a few contacts
+        // in other states on the same geometry: GMRES is then preconditioned with the
+        // factorization corrected for them (`LinearBackend::solve_changed`), which leaves
+        // the friction–normal coupling of the slipping contacts alone to iterate on
+        let near = match self.changed_since_factor(states) {
+            Some(c) if c > 0 && c <= LOW_RANK_MAX_CHANGES => {
+                let local = self.local_stiffness(trial, states, false);
+                self.assemble_kbuf(local);
+                Some(self.kbuf.clone())
+            }
+            _ => None,
+        };
         let local = self.local_stiffness(trial, states, true);
         self.assemble_kbuf(local);
         // an inexact Newton step: the linear residual left is a tenth of what counts as
@@ -684,13 +744,27 @@ impl<'a> Driver<'a> {
         let rn = Self::norm(r);
         let tolerance =
             (0.1 * self.converged_norm / rn.max(1e-300)).clamp(REUSE_TOLERANCE, TANGENT_TOLERANCE);
-        let out = crate::solve::reuse::gmres_with_factor(
-            &self.kbuf,
-            &mut *self.backend,
-            r,
-            tolerance,
-            TANGENT_MAX_ITERATIONS,
-        )?;
+        let (out, corrected) = match &near {
+            Some(near) => crate::solve::reuse::gmres_with_changed_factor(
+                &self.kbuf,
+                near,
+                &mut *self.backend,
+                r,
+                tolerance,
+                TANGENT_MAX_ITERATIONS,
+            ),
+            None => (
+                crate::solve::reuse::gmres_with_factor(
+                    &self.kbuf,
+                    &mut *self.backend,
+                    r,
+                    tolerance,
+                    TANGENT_MAX_ITERATIONS,
+                ),
+                false,
+            ),
+        };
+        let out = out?;
         // a step of the size of the model: K_t singular up to round-off, as in `correction`
         let size = self.model_size();
         if out.x.iter().any(|v| v.abs() > 0.1 * size) {
@@ -698,6 +772,56 @@ impl<'a> Driver<'a> {
         }
         self.stats.reused_factorizations += 1;
         self.stats.reuse_iterations += out.iterations;
+        if super::tracing() {
+            eprintln!(
+                "  tangent by GMRES: {} iterations (corrected preconditioner: {corrected})",
+                out.iterations
+            );
+        }
+        Some(out.x)
+    }
+
+    /// Contacts whose state in `now` differs from that of the held secant factorization;
+    /// `None` when no secant factorization is held.
+    fn changed_since_factor(&self, now: &[ContactState]) -> Option<usize> {
+        let Held::Secant(states) = &self.held else {
+            return None;
+        };
+        Some(states.iter().zip(now).filter(|(a, b)| a != b).count())
+    }
+
+    /// The secant correction K_s⁻¹ r by the held secant factorization corrected exactly
+    /// for the contacts that changed state since it was computed
+    /// ([`LinearBackend::solve_changed`]: the Woodbury identity inside the factor, no
+    /// iteration), when between 1 and [`LOW_RANK_MAX_CHANGES`] did (`kbuf` holds the new
+    /// K_s). Within an increment the iteration matrix changes only by those contacts'
+    /// stiffness (it is assembled on the last converged geometry, see
+    /// [`Driver::correction`]); across increments every entry changes and the backend
+    /// refuses after reading a few of them. `None`: the backend refused (unsupported, a
+    /// rank above its limit, a new geometry, K_s not positive definite) or the result's
+    /// true residual is above 10 × [`REUSE_TOLERANCE`]; then [`Driver::reuse`] or a
+    /// refactorization.
+    fn changed(&mut self, now: &[ContactState], r: &[f64]) -> Option<Vec<f64>> {
+        let changed = self.changed_since_factor(now)?;
+        if changed == 0 || changed > LOW_RANK_MAX_CHANGES {
+            return None;
+        }
+        let start = std::time::Instant::now();
+        let out = crate::solve::reuse::solve_changed(
+            &self.kbuf,
+            &mut *self.backend,
+            r,
+            10.0 * REUSE_TOLERANCE,
+        )?;
+        self.stats.low_rank_corrections += 1;
+        let rank = self.backend.stats().last_changed_rank;
+        if super::tracing() {
+            eprintln!(
+                "  low-rank correction: {changed} contacts changed, rank {rank}, {:.3e} s",
+                start.elapsed().as_secs_f64()
+            );
+        }
+        self.stats.low_rank_max_rank = self.stats.low_rank_max_rank.max(rank);
         Some(out.x)
     }
 
@@ -705,11 +829,11 @@ impl<'a> Driver<'a> {
     /// preconditioner, when few contacts changed state since it was computed (`kbuf` holds
     /// the new K_s). `None`: refactorize.
     fn reuse(&mut self, now: &[ContactState], r: &[f64]) -> Option<Vec<f64>> {
-        let Held::Secant(states) = &self.held else {
-            return None;
-        };
-        let changed = states.iter().zip(now).filter(|(a, b)| a != b).count();
+        let changed = self.changed_since_factor(now)?;
         if changed > REUSE_MAX_CHANGES {
+            if super::tracing() {
+                eprintln!("  refactorization: {changed} contacts changed");
+            }
             return None;
         }
         let out = crate::solve::reuse::solve_with_factor(
@@ -718,7 +842,14 @@ impl<'a> Driver<'a> {
             r,
             REUSE_TOLERANCE,
             REUSE_MAX_ITERATIONS,
-        )?;
+        );
+        if super::tracing() {
+            eprintln!(
+                "  PCG on the held factor: {changed} contacts changed, {:?} iterations",
+                out.as_ref().map(|o| o.iterations)
+            );
+        }
+        let out = out?;
         self.stats.reused_factorizations += 1;
         self.stats.reuse_iterations += out.iterations;
         Some(out.x)

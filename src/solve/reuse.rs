@@ -94,6 +94,28 @@ pub fn solve_with_factor(
     None
 }
 
+/// Solve `k · x = r` with `backend.solve_changed` (the held factorization of a nearby
+/// matrix corrected exactly for the change, [`LinearBackend::solve_changed`]: no
+/// iteration), the result confirmed by its true residual ‖r − K x‖₂ ≤ `tolerance` ‖r‖₂ as
+/// those of [`solve_with_factor`] are. `None` when the backend refuses (unsupported, a
+/// change of too high a rank, K not positive definite) or the residual is above: the
+/// caller iterates or refactorizes.
+pub fn solve_changed(
+    k: &CsrMatrix,
+    backend: &mut dyn LinearBackend,
+    r: &[f64],
+    tolerance: f64,
+) -> Option<Reused> {
+    let bnorm = dot(r, r).sqrt();
+    if bnorm == 0.0 {
+        return Some(Reused::zero(r.len()));
+    }
+    let mut x = r.to_vec();
+    backend.solve_changed(k, &mut x).ok()?;
+    let mut scratch = vec![0.0; r.len()];
+    confirmed(k, x, r, tolerance * bnorm, &mut scratch, 0)
+}
+
 /// `x` after `iterations` iterations of [`solve_with_factor`] or [`gmres_with_factor`]
 /// when its true residual ‖r − K x‖₂ is within `limit` (the callers give 10 × the
 /// tolerance their own estimate met: the factor allows for its round-off drift) and it is
@@ -135,6 +157,56 @@ pub fn gmres_with_factor(
     tolerance: f64,
     max_iterations: usize,
 ) -> Option<Reused> {
+    gmres(k, &mut |z| backend.solve(z), r, tolerance, max_iterations)
+}
+
+/// [`gmres_with_factor`] right-preconditioned with the held factorization corrected for
+/// a low-rank change: M⁻¹ z = `near`⁻¹ z by `backend.solve_changed(near, z)`
+/// ([`LinearBackend::solve_changed`]; `near`: the symmetric matrix nearby, e.g. the secant
+/// stiffness in the current contact states, when the backend holds the factorization of
+/// that of older ones). When the backend refuses the change (at its first call, which
+/// makes the correction) the held factorization alone preconditions, as in
+/// [`gmres_with_factor`]. Also returns whether the correction was used.
+pub fn gmres_with_changed_factor(
+    k: &CsrMatrix,
+    near: &CsrMatrix,
+    backend: &mut dyn LinearBackend,
+    r: &[f64],
+    tolerance: f64,
+    max_iterations: usize,
+) -> (Option<Reused>, bool) {
+    let mut corrected = true;
+    let out = gmres(
+        k,
+        &mut |z| {
+            if corrected {
+                let keep = z.to_vec();
+                if backend.solve_changed(near, z).is_ok() {
+                    return Ok(());
+                }
+                // the Arnoldi vectors keep each preconditioned vector (a flexible
+                // GMRES), so the preconditioner may change between iterations
+                corrected = false;
+                z.copy_from_slice(&keep);
+            }
+            backend.solve(z)
+        },
+        r,
+        tolerance,
+        max_iterations,
+    );
+    (out, corrected)
+}
+
+/// The GMRES of [`gmres_with_factor`] with the preconditioner solve `precondition`
+/// (z ← M⁻¹ z in place).
+fn gmres(
+    k: &CsrMatrix,
+    precondition: &mut dyn FnMut(&mut [f64]) -> Result<(), dfem_kernels::SolveError>,
+    r: &[f64],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Option<Reused> {
     let n = r.len();
     let beta = sdot(r, r).sqrt();
     if beta == 0.0 {
@@ -149,7 +221,7 @@ pub fn gmres_with_factor(
     let mut w = vec![0.0; n];
     for j in 0..max_iterations {
         let mut zj = v[j].clone();
-        backend.solve(&mut zj).ok()?;
+        precondition(&mut zj).ok()?;
         k.mul_vec(&zj, &mut w);
         z.push(zj);
         let mut hj = vec![0.0; j + 2];
@@ -272,17 +344,24 @@ mod tests {
         assert!(solve_with_factor(&a_new, &mut held, &rhs, 1e-12, 1).is_none());
     }
 
+    /// `sym` (the chain of springs `k`) with two one-sided couplings at springs `a` and `b`
+    /// (a slipping contact's friction–normal term of Newton's tangent is one such entry):
+    /// K = K_s + a rank-2 nonsymmetric change; with the test's right-hand side and K⁻¹ of
+    /// it by LU.
+    fn coupled(sym: &CsrMatrix, k: &[f64], a: usize, b: usize) -> (CsrMatrix, Vec<f64>, Vec<f64>) {
+        let mut tangent = sym.clone();
+        tangent.add(a, a + 1, -0.6 * k[a]);
+        tangent.add(b + 1, b, 0.6 * k[b]);
+        let rhs = rhs();
+        let exact = direct(crate::solve::backend("faer-lu").unwrap(), &tangent, &rhs);
+        (tangent, rhs, exact)
+    }
+
     #[test]
     fn gmres_on_a_nonsymmetric_rank_two_change_matches_lu_in_three_iterations() {
         let k: Vec<f64> = (0..200).map(|i| 1.0 + (i % 7) as f64).collect();
         let sym = chain(&k);
-        // two one-sided couplings (a slipping contact's friction–normal term of Newton's
-        // tangent is one such entry): K = K_s + a rank-2 nonsymmetric change
-        let mut tangent = sym.clone();
-        tangent.add(40, 41, -0.6 * k[40]);
-        tangent.add(151, 150, 0.6 * k[150]);
-        let rhs = rhs();
-        let exact = direct(crate::solve::backend("faer-lu").unwrap(), &tangent, &rhs);
+        let (tangent, rhs, exact) = coupled(&sym, &k, 40, 150);
 
         let mut held = FaerCholesky::new();
         held.factorize(&sym).unwrap();
@@ -293,5 +372,40 @@ mod tests {
         assert_close(&out.x, &exact, 1e-10);
         // too few iterations allowed: the caller factorizes the tangent itself
         assert!(gmres_with_factor(&tangent, &mut held, &rhs, 1e-12, 1).is_none());
+    }
+
+    #[test]
+    fn gmres_with_the_corrected_factor_needs_only_the_nonsymmetric_part() {
+        let k: Vec<f64> = (0..200).map(|i| 1.0 + (i % 7) as f64).collect();
+        let sym_old = chain(&k);
+        // two springs changed state since the held factorization (rank 2) ...
+        let mut k_new = k.clone();
+        k_new[20] *= 0.05;
+        k_new[120] *= 3.0;
+        let near = chain(&k_new);
+        // ... and the tangent adds two one-sided couplings (rank 2, nonsymmetric)
+        let (tangent, rhs, exact) = coupled(&near, &k_new, 60, 180);
+
+        let mut held = FaerCholesky::new();
+        held.factorize(&sym_old).unwrap();
+        let (out, corrected) =
+            gmres_with_changed_factor(&tangent, &near, &mut held, &rhs, 1e-12, 10);
+        let out = out.unwrap();
+        assert!(corrected);
+        // K near⁻¹ = I + rank 2: at most 3 iterations in exact arithmetic, against up to 5
+        // with the held factor alone (I + rank 4)
+        assert!(out.iterations <= 3, "{} iterations", out.iterations);
+        assert_close(&out.x, &exact, 1e-10);
+        let plain = gmres_with_factor(&tangent, &mut held, &rhs, 1e-12, 10).unwrap();
+        assert!(plain.iterations > out.iterations, "{}", plain.iterations);
+        // a backend that refuses the change: the held factor alone, the same answer
+        let mut refusing = FaerCholesky::new().with_changed_max_rank(0);
+        refusing.factorize(&sym_old).unwrap();
+        let (out, corrected) =
+            gmres_with_changed_factor(&tangent, &near, &mut refusing, &rhs, 1e-12, 10);
+        let out = out.unwrap();
+        assert!(!corrected);
+        assert_eq!(out.iterations, plain.iterations);
+        assert_close(&out.x, &exact, 1e-10);
     }
 }

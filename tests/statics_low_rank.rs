@@ -1,0 +1,107 @@
+//! The static driver's low-rank path (issue 6; `Driver::changed` in
+//! src/analysis/statics.rs, `LinearBackend::solve_changed`): a secant correction in which
+//! a few contacts changed state since the held factorization is solved with that factor
+//! corrected exactly for the change (the Woodbury identity inside the factor,
+//! kernels/src/lowrank.rs) instead of conjugate gradients on it or a refactorization.
+//!
+//! The P2 wall of docs/performance.md scaled down (12 courses of 12 rigid bricks, and 6 of
+//! 6 deformable ones), gravity then 0.3 g lateral with Mohr–Coulomb joints (friction
+//! 0.6), run twice: with `faer-cholesky` as is, and with its low-rank path disabled (rank
+//! limit 0, so every change is refused and the driver iterates or refactorizes as before
+//! the path existed). Every correction of both runs solves its linear system to a true
+//! relative residual ≤ 10⁻⁹ (the path's check, `REUSE_TOLERANCE` × 10; conjugate gradients
+//! the same; a refactorization to round-off), but the tangent steps by GMRES that end an
+//! increment are inexact by design (their linear residual is a tenth of the converged
+//! out-of-balance force, `Driver::tangent_with_secant_factor`), and with the path they
+//! are preconditioned with the corrected factorization, so they stop at other inexact
+//! solutions. Both runs converge every increment to the same out-of-balance tolerance
+//! (10⁻⁶ of the force scale here), with the same contact states; the displacements may
+//! differ by what that tolerance leaves free, bounded here by 10⁻⁶ of the largest
+//! (measured: 4·10⁻⁸ rigid, 3·10⁻¹¹ deformable, where fewer tangent steps are taken).
+
+mod common;
+use dfem::analysis::{self, Outcome, Status};
+use dfem_kernels::{FaerCholesky, LinearBackend};
+
+/// P2 (benches/scenes/p2_wall40_rigid.toml) with n × n bricks of `kind` and `steps`
+/// lateral steps.
+fn scene(n: usize, kind: &str, steps: usize) -> dfem::scene::Scene {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/benches/scenes/p2_wall40_rigid.toml"
+    ))
+    .unwrap()
+    .replace("courses = 40", &format!("courses = {n}"))
+    .replace(
+        "bricks_per_course = 40",
+        &format!("bricks_per_course = {n}"),
+    )
+    .replace("kind = \"rigid\"", &format!("kind = \"{kind}\""))
+    .replace("load_steps = 30", &format!("load_steps = {steps}"))
+        + "tolerance = 1e-6\n";
+    common::scene(&text)
+}
+
+fn run(sc: &dfem::scene::Scene, mut backend: FaerCholesky) -> Outcome {
+    let mesh = dfem::mesh::build(sc);
+    let backend: &mut dyn LinearBackend = &mut backend;
+    analysis::run(sc, &mesh, backend).unwrap()
+}
+
+fn check(n: usize, kind: &str, steps: usize) {
+    let sc = scene(n, kind, steps);
+    let with = run(&sc, FaerCholesky::new());
+    let without = run(&sc, FaerCholesky::new().with_changed_max_rank(0));
+    let label = format!("{n} x {n} {kind}");
+    assert_eq!(with.status, Status::Stable, "{label}");
+    assert_eq!(without.status, Status::Stable, "{label}");
+    // the path is taken, and only with it
+    assert!(
+        with.stats.low_rank_corrections > 0,
+        "{label}: {:?}",
+        with.stats
+    );
+    assert!(with.stats.low_rank_max_rank > 0, "{label}");
+    assert_eq!(without.stats.low_rank_corrections, 0, "{label}");
+    // it saves factorizations or iterations
+    assert!(
+        with.stats.factorizations + with.stats.reuse_iterations
+            < without.stats.factorizations + without.stats.reuse_iterations,
+        "{label}: with {:?}, without {:?}",
+        with.stats,
+        without.stats
+    );
+    let scale = without.u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = with
+        .u
+        .iter()
+        .zip(&without.u)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    eprintln!(
+        "{label}: displacements differ by {:e} of the largest; with the path {:?}, without {:?}",
+        diff / scale,
+        (
+            with.stats.factorizations,
+            with.stats.reuse_iterations,
+            with.stats.low_rank_corrections,
+            with.stats.low_rank_max_rank
+        ),
+        (without.stats.factorizations, without.stats.reuse_iterations)
+    );
+    assert!(
+        diff <= 1e-6 * scale,
+        "{label}: displacements differ by {:e} of the largest",
+        diff / scale
+    );
+    assert_eq!(with.contact_states, without.contact_states, "{label}");
+}
+
+#[test]
+fn rigid_wall_same_results_with_and_without_the_low_rank_path() {
+    check(12, "rigid", 10);
+}
+
+#[test]
+fn deformable_wall_same_results_with_and_without_the_low_rank_path() {
+    check(6, "deformable", 10);
+}

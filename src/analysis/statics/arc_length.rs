@@ -784,10 +784,7 @@ impl Driver<'_> {
                     self.corrector(&trial, &r, rn, (p, base), &dq, lam, constraint, false)?
                 {
                     secant_rn = Some(sec.0 / scale);
-                    // the better of the two: a tangent step that raises the out-of-balance
-                    // force 10³-fold (a stiff brick crack that closes in it) is not kept
-                    // where the secant one nearly holds it
-                    if pick.as_ref().is_none_or(|t| sec.0 < t.0) {
+                    if sec.0 < rn || pick.is_none() {
                         pick = Some(sec);
                     }
                 }

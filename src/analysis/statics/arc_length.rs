@@ -784,7 +784,13 @@ impl Driver<'_> {
                     self.corrector(&trial, &r, rn, (p, base), &dq, lam, constraint, false)?
                 {
                     secant_rn = Some(sec.0 / scale);
-                    if sec.0 < rn || pick.is_none() {
+                    // the secant step where it lowers the out-of-balance force; also where
+                    // the tangent step raises it over 100-fold (a stiff brick crack that
+                    // closes in it) and the secant one less
+                    let blown = pick
+                        .as_ref()
+                        .is_none_or(|t| t.0 > 100.0 * rn && sec.0 < t.0);
+                    if sec.0 < rn || blown {
                         pick = Some(sec);
                     }
                 }

@@ -193,6 +193,17 @@ const PREDICTOR_LEAST_SCALE: f64 = 1.0 / 4096.0;
 /// of the model.
 const SWITCH_FRACTION: f64 = 0.1;
 
+/// The steps α = 1, ½, …, 2¹⁻ⁿ of the backtracking of a correction
+/// ([`Driver::backtrack`]), n this constant: the first that does not raise the
+/// out-of-balance force is taken, else the best of them. Past J4D's peak
+/// (docs/performance.md, "Eindhoven walls") the iterations cycled with the residual
+/// halving at α = ½ for six iterations and then rising 20-fold at every α down to ⅛: a
+/// brick crack (kₙ ≈ 2·10¹² N/m for a 26 mm contact) that closes within 4·10⁻⁸ m of the
+/// iterate, so that a step short of its closure is 10⁻³ of the Newton step. With the
+/// steps down to 2⁻¹¹ the wall follows its softening branch to the end of the push (with
+/// four it stopped at 27.5–42 % of it, main at 43 %).
+const BACKTRACK_STEPS: usize = 12;
+
 /// The secant iterations on δλ of the dissipation constraint in one correction.
 const SECANT_STEPS: usize = 4;
 
@@ -487,8 +498,9 @@ impl Driver<'_> {
     /// out-of-balance force `r`, its norm `rn`): the solves with the tangent or secant
     /// matrix, δλ from the constraint — on the cylinder ‖dq + δu_r + δλ δu_P‖² = n Δl²
     /// the root that turns the increment least, on the dissipation the root of Eq. A2
-    /// along the line ([`Driver::dissipation_root`]) — and backtracking (the best of the steps 1, ½, ¼, ⅛
-    /// where the full one raises the out-of-balance force). Returns (the norm of the
+    /// along the line ([`Driver::dissipation_root`]) — and backtracking (the best of the
+    /// steps 1, ½, …, 2⁻¹¹ of [`BACKTRACK_STEPS`] where the full one raises the
+    /// out-of-balance force). Returns (the norm of the
     /// out-of-balance force after it, the new dq, its δλ), or `None` when the matrix
     /// cannot be factorized or the line meets no point of the cylinder.
     #[allow(clippy::too_many_arguments)]
@@ -551,9 +563,9 @@ impl Driver<'_> {
         Ok(Some(self.backtrack(&w, &dp, dl, rn, (p, base), dq, lam)))
     }
 
-    /// The best of the steps α = 1, ½, ¼, ⅛ from `dq` towards `w` + δλ `dp` at the load
-    /// factor `lam` + α δλ (the first that does not raise the out-of-balance force
-    /// above `rn`): (its out-of-balance force, the iterate, α δλ).
+    /// The best of the steps α = 1, ½, …, 2⁻¹¹ ([`BACKTRACK_STEPS`]) from `dq` towards
+    /// `w` + δλ `dp` at the load factor `lam` + α δλ (the first that does not raise the
+    /// out-of-balance force above `rn`): (its out-of-balance force, the iterate, α δλ).
     #[allow(clippy::too_many_arguments)]
     fn backtrack(
         &self,
@@ -568,7 +580,7 @@ impl Driver<'_> {
         let zero = vec![[0.0; 2]; self.cur.blocks.len()];
         let mut best: Option<(f64, Vec<f64>, f64)> = None;
         let mut alpha = 1.0;
-        for _ in 0..4 {
+        for _ in 0..BACKTRACK_STEPS {
             let cand: Vec<f64> = dq
                 .iter()
                 .zip(w)
@@ -590,7 +602,7 @@ impl Driver<'_> {
             }
             alpha *= 0.5;
         }
-        best.expect("four steps tried")
+        best.expect("BACKTRACK_STEPS > 0 steps tried")
     }
 
     /// One arc-length increment under `constraint` from the committed state at the load
@@ -642,7 +654,12 @@ impl Driver<'_> {
             _ => {
                 let trial = self.trial(&dq, &zero);
                 let r = self.out_of_balance(&f_ext(lam0), &trial.f_int);
-                let Some((ur, up)) = self.solve_pair(&trial, &r, p, true)? else {
+                // a push that reverses the last increment (the foot of a snap-back): the
+                // contacts that softened on the way down unload along their elastic
+                // springs, which the secant matrix has and the tangent (their softening
+                // slopes) has not
+                let reverses = previous.is_some() && matches!(constraint, Constraint::Push(_));
+                let Some((ur, up)) = self.solve_pair(&trial, &r, p, !reverses)? else {
                     return Ok(Err(StepFailure::Divergence));
                 };
                 dlam = match constraint {

@@ -204,6 +204,20 @@ const SWITCH_FRACTION: f64 = 0.1;
 /// four it stopped at 27.5–42 % of it, main at 43 %).
 const BACKTRACK_STEPS: usize = 12;
 
+/// The failed checks of Eq. F2 in a row, each with the true laws' out-of-balance force
+/// within [`CHECK_SAME`] of the one before, after which the increment has failed: the
+/// chords (Eq. F1) to a point where the frozen laws converge can lead back to that point
+/// when the iterate does not move (on J6D past its peak 300 checks in a row gave
+/// 9.467–9.469·10⁻⁴ of the load, the stall test restarting at every check). A check that
+/// raises the force is not such a repeat: on the snap-back joint of
+/// tests/validation_softening.rs (c) and (d) the regula falsi at the peak goes through
+/// cycles of checks at 8·10⁻³ to 1 of the load before one converges.
+const CHECK_LIMIT: usize = 10;
+
+/// The relative difference (of the out-of-balance force with the true laws) within
+/// which two checks of Eq. F2 in a row count as the same point ([`CHECK_LIMIT`]).
+const CHECK_SAME: f64 = 1e-3;
+
 /// The secant iterations on δλ of the dissipation constraint in one correction.
 const SECANT_STEPS: usize = 4;
 
@@ -684,6 +698,10 @@ impl Driver<'_> {
         let mut prev_state: Option<Vec<ContactState>> = None;
         let (mut best_rn, mut best_it) = (f64::INFINITY, 0);
         let mut residual = f64::INFINITY;
+        // the out-of-balance force with the true laws at the last check of Eq. F2 (N)
+        let mut last_check = f64::INFINITY;
+        // the checks of Eq. F2 in a row that have not lowered it
+        let mut stuck = 0;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
             let fe = f_ext(lam0 + dlam);
@@ -715,6 +733,18 @@ impl Driver<'_> {
                 self.stats.contact_releases += 1;
                 (trial, r, scale, rn) = (truth, r_true, s_true, rn_true);
                 if rn > self.settings.tolerance * scale {
+                    if (rn - last_check).abs() <= CHECK_SAME * last_check {
+                        // the chords of the last check led back to the same point:
+                        // regula falsi makes no progress (J6D converged 300 times with
+                        // one contact frozen at 9.468·10⁻⁴ with the true laws)
+                        stuck += 1;
+                        if stuck >= CHECK_LIMIT {
+                            return Ok(Err(StepFailure::NoConvergence(rn / scale)));
+                        }
+                    } else {
+                        stuck = 0;
+                    }
+                    last_check = rn;
                     // go on from here, the frozen laws now the chords to this point
                     // (their forces the true ones): a new start for the stall test
                     best_rn = f64::INFINITY;

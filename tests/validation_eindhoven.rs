@@ -646,3 +646,41 @@ fn eindhoven_j7d_sweep() {
     };
     sweep_and_check(2, "J7D", e);
 }
+
+/// The contact-state corrector (docs/theory.md, Eq. F1–F2) carries J7D, as shipped,
+/// through the state where it stopped without it: before the corrector the run stopped at
+/// 2.088 mm, 117.9 kN, 0.3 % below its first peak of 118.3 kN, its iterations cycling
+/// between the states of 4–8 contacts at the kinks of their laws (docs/performance.md,
+/// "Constraint switching and the reload past the snap-back"). With it the path goes on
+/// past that point and down the wall's softening branch: the load must fall by more
+/// than 3 % below the first peak (ten times the old 0.3 %) before the run ends.
+#[test]
+#[ignore = "a run of several minutes: run it with --ignored"]
+fn eindhoven_j7d_corrector_passes_the_old_stop() {
+    let sc = wall("eindhoven-j7d", 0.026, 4e-3, 80, "dissipation");
+    let (_, out) = common::solve(&sc);
+    let pts = curve(&out);
+    let peak = first_peak(&pts);
+    let least = pts[peak.0..]
+        .iter()
+        .map(|p| p[1])
+        .fold(f64::INFINITY, f64::min);
+    let far = pts.iter().map(|p| p[0]).fold(0.0, f64::max);
+    let path = out.capacity_curve.as_ref().unwrap().path.clone().unwrap();
+    eprintln!(
+        "J7D: first peak {:.2} kN, least load after it {:.2} kN ({:+.1} %), furthest {:.3} mm, reached {:.1} %, increments {:?}, {} contact-state checks, end: {}",
+        peak.1 / 1e3,
+        least / 1e3,
+        100.0 * (least - peak.1) / peak.1,
+        far * 1e3,
+        100.0 * path.reached,
+        path.increments,
+        out.stats.contact_releases,
+        path.end
+    );
+    assert!(
+        least < 0.97 * peak.1,
+        "J7D: the load fell to {least} N after the first peak of {} N",
+        peak.1
+    );
+}

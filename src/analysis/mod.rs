@@ -70,6 +70,9 @@ pub struct Stats {
     /// Iterations of the static driver that moved groups of blocks held only by slipping
     /// and open contacts along their free motion (`Driver::free_motion`, docs/theory.md §4).
     pub free_motions: usize,
+    /// Arc-length iterations that converged with contacts frozen by the contact-state
+    /// corrector and were checked against the true laws (docs/theory.md, Eq. F2).
+    pub contact_releases: usize,
     /// Converged time steps of a dynamic run cut because a contact closed by more than
     /// the band thickness within the step (an impact the step could not resolve).
     pub impact_cuts: usize,

@@ -299,6 +299,38 @@ pub struct Driver<'a> {
     /// Per contact: its changes of state in the iterations of the current arc-length
     /// increment (`arc_length`; empty under displacement control).
     flips: Vec<u32>,
+    /// Per contact: the linear law (a chord of its law) that it keeps for the rest of the
+    /// current arc-length increment (the contact-state corrector, docs/theory.md,
+    /// "Contact-state corrector", Eq. F1; empty, or all `None`, elsewhere).
+    frozen: Vec<Option<Frozen>>,
+}
+
+/// A contact held in one state of its law for the rest of an arc-length increment: a
+/// fixed linear law through its force at the iterate where it was frozen,
+/// F(Δδ) = F* + T (Δδ − Δδ*) (docs/theory.md, Eq. F1: T the chord from the committed
+/// force), smooth where the law has a kink.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Frozen {
+    /// Δδ* (m): the relative displacement increment where the law was linearized.
+    pub d: [f64; 2],
+    /// F* (N): the law's force there (normal, shear).
+    pub f: [f64; 2],
+    /// T (N/m): the frozen law's slope (rows Fₙ, Fₛ; columns δₙ, δₛ), the chord of
+    /// `arc_length::chord_law`.
+    pub t: LocalStiffness,
+    /// The law's state there, which the contact keeps.
+    pub state: ContactState,
+}
+
+impl Frozen {
+    /// The force (N) of the frozen law at the increment of relative displacement `d` (m).
+    pub fn force(&self, d: [f64; 2]) -> [f64; 2] {
+        let dd = [d[0] - self.d[0], d[1] - self.d[1]];
+        [
+            self.f[0] + self.t[0][0] * dd[0] + self.t[0][1] * dd[1],
+            self.f[1] + self.t[1][0] * dd[0] + self.t[1][1] * dd[1],
+        ]
+    }
 }
 
 /// What the progress report needs between calls.
@@ -455,11 +487,16 @@ impl<'a> Driver<'a> {
             pins: Vec::new(),
             push_curve: Vec::new(),
             flips: Vec::new(),
+            frozen: Vec::new(),
         })
     }
 
+    /// Evaluate the increment `dq` (and the prescribed translations `presc`) from the
+    /// committed state; the contacts held by the contact-state corrector
+    /// ([`Driver::frozen`]) take the force of their frozen law (Eq. F1), the difference
+    /// from the true law's force mapped into the internal forces.
     fn trial(&self, dq: &[f64], presc: &[Point]) -> Trial {
-        evaluate(
+        let mut t = evaluate(
             &self.system,
             &self.cur,
             &self.committed,
@@ -468,7 +505,19 @@ impl<'a> Driver<'a> {
             self.scene.model.thickness,
             dq,
             presc,
-        )
+        );
+        for (k, fr) in self.frozen.iter().enumerate() {
+            let Some(fr) = fr else { continue };
+            let fa = fr.force(t.rel[k]);
+            let delta = [fa[0] - t.force[k][0], fa[1] - t.force[k][1]];
+            if delta != [0.0, 0.0] {
+                let map = crate::assembly::contact_map(&t.mesh, &t.mesh.contacts[k]);
+                crate::assembly::add_mapped_force(&map, delta, &mut t.f_int);
+            }
+            t.force[k] = fa;
+            t.state[k] = fr.state;
+        }
+        t
     }
 
     /// The contacts' local stiffness matrices (N/m) in the given states; `newton` adds the

@@ -120,6 +120,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "tangent_lu_skipped": s.tangent_lu_skipped,
             "tangent_fallbacks": s.tangent_fallbacks,
             "free_motions": s.free_motions,
+            "contact_releases": s.contact_releases,
             "impact_cuts": s.impact_cuts,
             "held_open": s.held_open,
             "error_cuts": s.error_cuts,

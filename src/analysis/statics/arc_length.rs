@@ -43,12 +43,14 @@
 
 use super::*;
 
-/// Changes of state of a contact within one arc-length increment after which its tangent
-/// is the chord from its committed force (and its secant the elastic springs): on the
-/// Eindhoven wall (docs/performance.md) contacts at the kink of a softening law (its peak,
-/// the onset of slip) alternated between the two sides for every iteration of an
-/// increment, and on the snap-back joint of tests/validation_softening.rs Newton cycled at
-/// the peak with the residual between 2·10⁻⁶ and 7·10⁻⁵ of the load.
+/// Changes of state of a contact within one arc-length increment after which it is
+/// frozen at the chord of its law from its committed force (the contact-state corrector,
+/// docs/theory.md, Eq. F1; its secant the elastic springs): on the Eindhoven wall
+/// (docs/performance.md) contacts at the kinks of their laws (the peak of a softening
+/// joint, the onset of slip, a brick crack closing) alternated between the two sides for
+/// every iteration of an increment, and on the snap-back joint of
+/// tests/validation_softening.rs Newton cycled at the peak with the residual between
+/// 2·10⁻⁶ and 7·10⁻⁵ of the load. Two instead of three stopped J6D at its old point.
 pub(super) const FLIP_LIMIT: u32 = 3;
 
 /// `[analysis] path = "arc_length"` and `arc_length` (m).
@@ -177,6 +179,12 @@ enum Kind {
 /// Eindhoven wall the cylinder accepted 4,000 such increments without moving the beam).
 const PREDICTOR_DISSIPATION: f64 = 0.5;
 
+/// The least scale of the last increment in a dissipation-controlled predictor: as
+/// small as Δτ's least value against its largest (2⁻¹² with `max_cuts` = 6), so that
+/// cutting Δτ shortens the predictor (with a floor of ¼ the cuts on J7D's snap-back left
+/// the predictor, and its out-of-balance force of 7·10⁻³, unchanged).
+const PREDICTOR_LEAST_SCALE: f64 = 1.0 / 4096.0;
+
 /// The switch from the cylinder to the dissipation constraint: after the first converged
 /// increment whose dissipated energy exceeds this fraction of the work of the push in it
 /// (or any increment past a peak, where the push's work is not positive and the
@@ -184,6 +192,31 @@ const PREDICTOR_DISSIPATION: f64 = 0.5;
 /// dissipation itself; a fraction of the work does not depend on the units or the size
 /// of the model.
 const SWITCH_FRACTION: f64 = 0.1;
+
+/// The steps α = 1, ½, …, 2¹⁻ⁿ of the backtracking of a correction
+/// ([`Driver::backtrack`]), n this constant: the first that does not raise the
+/// out-of-balance force is taken, else the best of them. Past J4D's peak
+/// (docs/performance.md, "Eindhoven walls") the iterations cycled with the residual
+/// halving at α = ½ for six iterations and then rising 20-fold at every α down to ⅛: a
+/// brick crack (kₙ ≈ 2·10¹² N/m for a 26 mm contact) that closes within 4·10⁻⁸ m of the
+/// iterate, so that a step short of its closure is 10⁻³ of the Newton step. With the
+/// steps down to 2⁻¹¹ the wall follows its softening branch to the end of the push (with
+/// four it stopped at 27.5–42 % of it, main at 43 %).
+const BACKTRACK_STEPS: usize = 12;
+
+/// The failed checks of Eq. F2 in a row, each with the true laws' out-of-balance force
+/// within [`CHECK_SAME`] of the one before, after which the increment has failed: the
+/// chords (Eq. F1) to a point where the frozen laws converge can lead back to that point
+/// when the iterate does not move (on J6D past its peak 300 checks in a row gave
+/// 9.467–9.469·10⁻⁴ of the load, the stall test restarting at every check). A check that
+/// raises the force is not such a repeat: on the snap-back joint of
+/// tests/validation_softening.rs (c) and (d) the regula falsi at the peak goes through
+/// cycles of checks at 8·10⁻³ to 1 of the load before one converges.
+const CHECK_LIMIT: usize = 10;
+
+/// The relative difference (of the out-of-balance force with the true laws) within
+/// which two checks of Eq. F2 in a row count as the same point ([`CHECK_LIMIT`]).
+const CHECK_SAME: f64 = 1e-3;
 
 /// The secant iterations on δλ of the dissipation constraint in one correction.
 const SECANT_STEPS: usize = 4;
@@ -196,6 +229,71 @@ enum StepFailure {
     Divergence,
     /// With `path = "dissipation"`: the increment ends with a pull on the pushed block.
     Pulls,
+}
+
+/// The frozen law (Eq. F1) of a contact whose law gives the force `f` (N) and the state
+/// `state` at the increment `d` (m) from its committed force `f0` (N): the chord from
+/// (0, `f0`) to (`d`, `f`), each component on its own, the elastic spring `springs`
+/// where that component has not moved. The chord lies between the slopes on the two
+/// sides of a kink the contact has crossed, so that the new chords of Eq. F2
+/// close in on the kink as by regula falsi: at the peak of the snap-back joint of
+/// tests/validation_softening.rs (c) the tangent of either side cycled, and J7D with the
+/// tangent in place of the chord stopped where it had stopped without the corrector
+/// (2.088 mm).
+fn chord_law(
+    springs: crate::material::ContactSprings,
+    f0: [f64; 2],
+    d: [f64; 2],
+    f: [f64; 2],
+    state: ContactState,
+) -> Frozen {
+    let chord = |j: usize, k0: f64| {
+        if d[j].abs() > 1e-9 * (f0[j].abs() / k0).max(1e-15) {
+            (f[j] - f0[j]) / d[j]
+        } else {
+            k0
+        }
+    };
+    Frozen {
+        d,
+        f,
+        t: [[chord(0, springs.kn), 0.0], [0.0, chord(1, springs.ks)]],
+        state,
+    }
+}
+
+/// The tangent (N/m, in the contact's frame: rows (Fₙ, Fₛ), columns (δₙ, δₛ)) of
+/// contact `k`'s law at the increment of relative displacement `d` (m) where it gives
+/// the force `base` (N), by forward differences of the law's return from the committed
+/// state: ∂F/∂δ ≈ (F(Δδ + ε eⱼ) − F(Δδ)) / ε, ε = 10⁻⁷ of the band's elastic
+/// displacement at its strength scale or of the increment, whichever is larger.
+fn law_tangent(
+    laws: &PerContact<JointLaw>,
+    areas: &[f64],
+    committed: &Committed,
+    k: usize,
+    d: [f64; 2],
+    base: [f64; 2],
+) -> crate::assembly::LocalStiffness {
+    let law = laws.get(k);
+    let a = areas[k];
+    let sp = law.springs(a);
+    let f0 = committed.force[k];
+    let h = committed.history.get(k).copied().unwrap_or([0.0; 2]);
+    let scale = [
+        (f0[0].abs() / sp.kn).max(d[0].abs()).max(1e-12),
+        (f0[1].abs() / sp.ks).max(d[1].abs()).max(1e-12),
+    ];
+    let mut t = [[0.0; 2]; 2];
+    for j in 0..2 {
+        let eps = 1e-7 * scale[j];
+        let mut dd = d;
+        dd[j] += eps;
+        let (f, _, _) = law.update_history(a, f0, h, dd);
+        t[0][j] = (f[0] - base[0]) / eps;
+        t[1][j] = (f[1] - base[1]) / eps;
+    }
+    t
 }
 
 impl Driver<'_> {
@@ -333,49 +431,29 @@ impl Driver<'_> {
     /// nothing, a slipping one the friction coupling ∂Fₛ/∂δₙ.
     fn tangent_local(&self, trial: &Trial) -> Vec<crate::assembly::LocalStiffness> {
         use rayon::prelude::*;
-        let (laws, areas, committed, flips) = (&self.law, &self.area, &self.committed, &self.flips);
+        let (laws, areas, committed, frozen) =
+            (&self.law, &self.area, &self.committed, &self.frozen);
         (0..areas.len())
             .into_par_iter()
             .with_min_len(256)
-            .map(|k| {
-                let law = laws.get(k);
-                let a = areas[k];
-                let sp = law.springs(a);
-                let f0 = committed.force[k];
-                if flips.get(k).is_some_and(|&n| n >= FLIP_LIMIT) {
-                    // at the kink of its law (the peak of a softening joint) the tangent
-                    // jumps and Newton cycles between its two sides: the chord from the
-                    // committed force to the trial's lies between the two slopes, and
-                    // the iterations close in on the kink as by regula falsi
-                    let (d, f) = (trial.rel[k], trial.force[k]);
-                    let chord = |j: usize, k0: f64| {
-                        if d[j].abs() > 1e-9 * (f0[j].abs() / k0).max(1e-15) {
-                            (f[j] - f0[j]) / d[j]
-                        } else {
-                            k0
-                        }
-                    };
-                    return [[chord(0, sp.kn), 0.0], [0.0, chord(1, sp.ks)]];
-                }
-                let h = committed.history.get(k).copied().unwrap_or([0.0; 2]);
-                let d = trial.rel[k];
-                let base = trial.force[k];
-                let scale = [
-                    (f0[0].abs() / sp.kn).max(d[0].abs()).max(1e-12),
-                    (f0[1].abs() / sp.ks).max(d[1].abs()).max(1e-12),
-                ];
-                let mut t = [[0.0; 2]; 2];
-                for j in 0..2 {
-                    let eps = 1e-7 * scale[j];
-                    let mut dd = d;
-                    dd[j] += eps;
-                    let (f, _, _) = law.update_history(a, f0, h, dd);
-                    t[0][j] = (f[0] - base[0]) / eps;
-                    t[1][j] = (f[1] - base[1]) / eps;
-                }
-                t
+            .map(|k| match frozen.get(k) {
+                // held by the contact-state corrector: its frozen law's tangent
+                Some(Some(fr)) => fr.t,
+                _ => law_tangent(laws, areas, committed, k, trial.rel[k], trial.force[k]),
             })
             .collect()
+    }
+
+    /// The contact-state corrector's frozen law of contact `k` at `trial` (whose force
+    /// at `k` is the true law's): Eq. F1 with the chord of [`chord_law`].
+    fn freeze(&self, k: usize, trial: &Trial) -> Frozen {
+        chord_law(
+            self.law.get(k).springs(self.area[k]),
+            self.committed.force[k],
+            trial.rel[k],
+            trial.force[k],
+            trial.state[k],
+        )
     }
 
     /// Solve K x = b for the two right-hand sides: with the tangent matrix of `trial`
@@ -434,8 +512,9 @@ impl Driver<'_> {
     /// out-of-balance force `r`, its norm `rn`): the solves with the tangent or secant
     /// matrix, δλ from the constraint — on the cylinder ‖dq + δu_r + δλ δu_P‖² = n Δl²
     /// the root that turns the increment least, on the dissipation the root of Eq. A2
-    /// along the line ([`Driver::dissipation_root`]) — and backtracking (the best of the steps 1, ½, ¼, ⅛
-    /// where the full one raises the out-of-balance force). Returns (the norm of the
+    /// along the line ([`Driver::dissipation_root`]) — and backtracking (the best of the
+    /// steps 1, ½, …, 2⁻¹¹ of [`BACKTRACK_STEPS`] where the full one raises the
+    /// out-of-balance force). Returns (the norm of the
     /// out-of-balance force after it, the new dq, its δλ), or `None` when the matrix
     /// cannot be factorized or the line meets no point of the cylinder.
     #[allow(clippy::too_many_arguments)]
@@ -498,9 +577,9 @@ impl Driver<'_> {
         Ok(Some(self.backtrack(&w, &dp, dl, rn, (p, base), dq, lam)))
     }
 
-    /// The best of the steps α = 1, ½, ¼, ⅛ from `dq` towards `w` + δλ `dp` at the load
-    /// factor `lam` + α δλ (the first that does not raise the out-of-balance force
-    /// above `rn`): (its out-of-balance force, the iterate, α δλ).
+    /// The best of the steps α = 1, ½, …, 2⁻¹¹ ([`BACKTRACK_STEPS`]) from `dq` towards
+    /// `w` + δλ `dp` at the load factor `lam` + α δλ (the first that does not raise the
+    /// out-of-balance force above `rn`): (its out-of-balance force, the iterate, α δλ).
     #[allow(clippy::too_many_arguments)]
     fn backtrack(
         &self,
@@ -515,7 +594,7 @@ impl Driver<'_> {
         let zero = vec![[0.0; 2]; self.cur.blocks.len()];
         let mut best: Option<(f64, Vec<f64>, f64)> = None;
         let mut alpha = 1.0;
-        for _ in 0..4 {
+        for _ in 0..BACKTRACK_STEPS {
             let cand: Vec<f64> = dq
                 .iter()
                 .zip(w)
@@ -537,12 +616,18 @@ impl Driver<'_> {
             }
             alpha *= 0.5;
         }
-        best.expect("four steps tried")
+        best.expect("BACKTRACK_STEPS > 0 steps tried")
     }
 
     /// One arc-length increment under `constraint` from the committed state at the load
     /// factor `lam0`, after the increment `previous` (unknowns, Δλ, dissipated energy in
     /// J): the converged trial, its Δλ and the energy it dissipates, or why not.
+    /// With the contact-state corrector: a
+    /// contact that changes state [`FLIP_LIMIT`] times in the increment is frozen
+    /// (Eq. F1) for the rest of it; when the iterations converge with contacts frozen,
+    /// the true laws decide: the increment is accepted if the out-of-balance force with
+    /// the true laws is within the tolerance, else every frozen contact takes the chord
+    /// to the point reached and the iterations go on from there (Eq. F2).
     fn arc_step(
         &mut self,
         base: &[f64],
@@ -565,7 +650,9 @@ impl Driver<'_> {
         // increment is scaled only from a previous one that moved the block forward
         let scaled = previous.and_then(|(prev, _, prev_d)| match constraint {
             Constraint::Cylinder(len2) => Some((len2 / dot(prev, prev).max(1e-300)).sqrt()),
-            Constraint::Dissipation(tau) => Some((tau / prev_d.max(1e-300)).clamp(0.25, 2.0)),
+            Constraint::Dissipation(tau) => {
+                Some((tau / prev_d.max(1e-300)).clamp(PREDICTOR_LEAST_SCALE, 2.0))
+            }
             Constraint::Push(da) => {
                 let moved = dot(p, prev);
                 (moved > 0.0).then(|| (da / moved).min(4.0))
@@ -581,7 +668,12 @@ impl Driver<'_> {
             _ => {
                 let trial = self.trial(&dq, &zero);
                 let r = self.out_of_balance(&f_ext(lam0), &trial.f_int);
-                let Some((ur, up)) = self.solve_pair(&trial, &r, p, true)? else {
+                // a push that reverses the last increment (the foot of a snap-back): the
+                // contacts that softened on the way down unload along their elastic
+                // springs, which the secant matrix has and the tangent (their softening
+                // slopes) has not
+                let reverses = previous.is_some() && matches!(constraint, Constraint::Push(_));
+                let Some((ur, up)) = self.solve_pair(&trial, &r, p, !reverses)? else {
                     return Ok(Err(StepFailure::Divergence));
                 };
                 dlam = match constraint {
@@ -601,16 +693,65 @@ impl Driver<'_> {
         }
         let size = self.model_size();
         self.flips = vec![0; self.cur.contacts.len()];
+        // the caller clears it after the increment
+        self.frozen = vec![None; self.cur.contacts.len()];
         let mut prev_state: Option<Vec<ContactState>> = None;
         let (mut best_rn, mut best_it) = (f64::INFINITY, 0);
         let mut residual = f64::INFINITY;
+        // the out-of-balance force with the true laws at the last check of Eq. F2 (N)
+        let mut last_check = f64::INFINITY;
+        // the checks of Eq. F2 in a row that have not lowered it
+        let mut stuck = 0;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
             let fe = f_ext(lam0 + dlam);
-            let trial = self.trial(&dq, &zero);
-            let r = self.out_of_balance(&fe, &trial.f_int);
-            let scale = self.force_scale(&fe, &trial.f_int);
-            let rn = Self::norm(&r);
+            let mut trial = self.trial(&dq, &zero);
+            let mut r = self.out_of_balance(&fe, &trial.f_int);
+            let mut scale = self.force_scale(&fe, &trial.f_int);
+            let mut rn = Self::norm(&r);
+            if rn <= self.settings.tolerance * scale && self.frozen.iter().any(Option::is_some) {
+                // converged with contacts frozen: the true laws decide (Eq. F2)
+                let held = std::mem::take(&mut self.frozen);
+                let truth = self.trial(&dq, &zero);
+                let r_true = self.out_of_balance(&fe, &truth.f_int);
+                let s_true = self.force_scale(&fe, &truth.f_int);
+                let rn_true = Self::norm(&r_true);
+                let n_frozen = held.iter().filter(|f| f.is_some()).count();
+                if super::super::tracing() {
+                    eprintln!(
+                        "arc corrector: converged with {n_frozen} contacts frozen at {:.3e}; with the true laws {:.3e}",
+                        rn / scale,
+                        rn_true / s_true
+                    );
+                }
+                // the chords to this point (regula falsi on the kinks)
+                self.frozen = held
+                    .iter()
+                    .enumerate()
+                    .map(|(k, f)| f.map(|_| self.freeze(k, &truth)))
+                    .collect();
+                self.stats.contact_releases += 1;
+                (trial, r, scale, rn) = (truth, r_true, s_true, rn_true);
+                if rn > self.settings.tolerance * scale {
+                    if (rn - last_check).abs() <= CHECK_SAME * last_check {
+                        // the chords of the last check led back to the same point:
+                        // regula falsi makes no progress (J6D converged 300 times with
+                        // one contact frozen at 9.468·10⁻⁴ with the true laws)
+                        stuck += 1;
+                        if stuck >= CHECK_LIMIT {
+                            return Ok(Err(StepFailure::NoConvergence(rn / scale)));
+                        }
+                    } else {
+                        stuck = 0;
+                    }
+                    last_check = rn;
+                    // go on from here, the frozen laws now the chords to this point
+                    // (their forces the true ones): a new start for the stall test
+                    best_rn = f64::INFINITY;
+                } else {
+                    self.frozen.iter_mut().for_each(|f| *f = None);
+                }
+            }
             residual = rn / scale;
             if let Some(pr) = self.progress.as_deref_mut() {
                 pr.iteration(it, residual);
@@ -618,6 +759,13 @@ impl Driver<'_> {
             if let Some(ps) = &prev_state {
                 for (c, (a, b)) in self.flips.iter_mut().zip(ps.iter().zip(&trial.state)) {
                     *c += u32::from(a != b);
+                }
+                // the contact-state corrector: a contact that keeps changing state at a
+                // kink of its law is frozen in the state it has now (Eq. F1)
+                for k in 0..self.flips.len() {
+                    if self.flips[k] >= FLIP_LIMIT && self.frozen[k].is_none() {
+                        self.frozen[k] = Some(self.freeze(k, &trial));
+                    }
                 }
                 if super::super::tracing() {
                     for (k, (a, b)) in ps
@@ -676,13 +824,33 @@ impl Driver<'_> {
             // all softening has a tangent near zero, and its step throws the piece far)
             let lam = lam0 + dlam;
             let mut pick = self.corrector(&trial, &r, rn, (p, base), &dq, lam, constraint, true)?;
+            let tangent_rn = pick.as_ref().map(|t| t.0 / scale);
+            let mut secant_rn = None;
             if pick.as_ref().is_none_or(|t| t.0 > rn) {
                 if let Some(sec) =
                     self.corrector(&trial, &r, rn, (p, base), &dq, lam, constraint, false)?
                 {
-                    if sec.0 < rn || pick.is_none() {
+                    secant_rn = Some(sec.0 / scale);
+                    // the secant step where it lowers the out-of-balance force; also where
+                    // the tangent step raises it over 100-fold (a stiff brick crack that
+                    // closes in it) and the secant one less
+                    let blown = pick
+                        .as_ref()
+                        .is_none_or(|t| t.0 > 100.0 * rn && sec.0 < t.0);
+                    if sec.0 < rn || blown {
                         pick = Some(sec);
                     }
+                }
+            }
+            if super::super::tracing() {
+                if let Some((_, next, dl_it)) = &pick {
+                    let (k, m) = next
+                        .iter()
+                        .zip(&dq)
+                        .map(|(a, b)| (a - b).abs())
+                        .enumerate()
+                        .fold((0, 0.0), |b, (i, v)| if v > b.1 { (i, v) } else { b });
+                    eprintln!("  step: tangent {tangent_rn:?} secant {secant_rn:?}, largest move {m:.3e} at unknown {k}, δλ {dl_it:.3e}");
                 }
             }
             let Some((_, next, dl_it)) = pick else {
@@ -790,7 +958,9 @@ pub(super) fn run(
             Kind::Push => Constraint::Push(da.min(s.target - along(d))),
         };
         let prev = previous.as_ref().map(|(q, l, e)| (q.as_slice(), *l, *e));
-        let step = match d.arc_step(base, &s.p, lam, constraint, prev)? {
+        let step = d.arc_step(base, &s.p, lam, constraint, prev);
+        d.frozen.clear();
+        let step = match step? {
             // a push cannot pull: with path = "dissipation" an increment that takes the
             // force on the block below zero (the foot of a snap-back) is not taken, and
             // the next constraint pushes the block on from the last state
@@ -942,4 +1112,130 @@ pub(super) fn run(
         ));
     }
     Ok((1.0, None, counts))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{ElasticBand, MohrCoulomb};
+
+    /// A dry Coulomb contact (no cohesion, no tension): kₙ = 10⁹ N/m, kₛ = 4·10⁸ N/m
+    /// over 1 m², tan φ = 0.75, committed at Fₙ = −1000 N, Fₛ = 600 N (|Fₛ| = 0.8 of
+    /// μ|Fₙ| = 750 N: sticking, 150 N below the Coulomb kink).
+    fn contact() -> (PerContact<JointLaw>, Vec<f64>, Committed) {
+        let law = JointLaw::MohrCoulomb(MohrCoulomb {
+            elastic: ElasticBand {
+                normal_modulus: 1e7,
+                shear_modulus: 4e6,
+                band: 0.01,
+            },
+            tan_phi: 0.75,
+            cohesion: 0.0,
+            tensile_strength: 0.0,
+        });
+        let committed = Committed {
+            stress: Vec::new(),
+            force: vec![[-1000.0, 600.0]],
+            state: vec![ContactState::Stick],
+            u: Vec::new(),
+            history: vec![[0.0; 2]],
+        };
+        (
+            PerContact {
+                laws: vec![law],
+                of: vec![0],
+            },
+            vec![1.0],
+            committed,
+        )
+    }
+
+    fn close(a: f64, b: f64, scale: f64) -> bool {
+        // forward differences of a law linear on each side of its kinks: round-off of
+        // forces of 10³ N over a step of 10⁻⁷ of the displacement scale, ~10⁻⁸ relative
+        (a - b).abs() <= 1e-6 * scale
+    }
+
+    /// The law's tangent on each side of the Coulomb kink and in tension, against the
+    /// closed forms of METHOD.md §3: stick diag(kₙ, kₛ); slip Fₛ = −sgn(Fₛ) tan φ Fₙ,
+    /// so ∂Fₛ/∂δₙ = −sgn(Fₛ) tan φ kₙ and ∂Fₛ/∂δₛ = 0; open nothing.
+    #[test]
+    fn law_tangent_matches_the_closed_forms_on_each_side_of_the_kink() {
+        let (laws, areas, committed) = contact();
+        let (kn, ks) = (1e9, 4e8);
+        let tangent = |d: [f64; 2]| {
+            let (f, st, _) = laws
+                .get(0)
+                .update_history(1.0, committed.force[0], [0.0; 2], d);
+            (law_tangent(&laws, &areas, &committed, 0, d, f), st)
+        };
+        // stick: shear 600 + 4·10⁸ · 2·10⁻⁷ = 680 N < 750 N
+        let (t, st) = tangent([0.0, 2e-7]);
+        assert_eq!(st, ContactState::Stick);
+        assert!(close(t[0][0], kn, kn) && close(t[1][1], ks, kn), "{t:?}");
+        assert!(close(t[0][1], 0.0, kn) && close(t[1][0], 0.0, kn), "{t:?}");
+        // slip: shear trial 600 + 4·10⁸ · 10⁻⁶ = 1000 N > 750 N
+        let (t, st) = tangent([0.0, 1e-6]);
+        assert_eq!(st, ContactState::Slip);
+        assert!(close(t[0][0], kn, kn) && close(t[1][1], 0.0, kn), "{t:?}");
+        assert!(close(t[1][0], -0.75 * kn, kn), "{t:?}");
+        // open: Fₙ = −1000 + 10⁹ · 2·10⁻⁶ = 1000 N > 0
+        let (t, st) = tangent([2e-6, 0.0]);
+        assert_eq!(st, ContactState::Open);
+        assert!(t.iter().flatten().all(|v| close(*v, 0.0, kn)), "{t:?}");
+    }
+
+    /// The frozen law (Eq. F1) of a contact frozen in slip at Δδ* = (0, 10⁻⁶ m), driven
+    /// back across the Coulomb kink. At Δδ = (0, s) the law gives 600 + kₛ s in stick and
+    /// μ|Fₙ| = 750 N in slip: the kink is at s* = 150 N / kₛ = 3.75·10⁻⁷ m. The chord from
+    /// the committed (0, 600 N) to (10⁻⁶ m, 750 N) has the slope 1.5·10⁸ N/m, between the
+    /// slip side's 0 and the stick side's kₛ = 4·10⁸ N/m; the normal component has not
+    /// moved and keeps kₙ. The frozen law's error against the law is the closed form
+    /// (kₛ − 1.5·10⁸) s in stick and 150 N − 1.5·10⁸ s in slip, largest at the kink
+    /// (93.75 N), and zero at both ends of the chord.
+    #[test]
+    fn frozen_chord_law_brackets_the_coulomb_kink() {
+        let (laws, _, committed) = contact();
+        let (kn, ks) = (1e9, 4e8);
+        let law = laws.get(0);
+        let at = |d: [f64; 2]| law.update_history(1.0, committed.force[0], [0.0; 2], d);
+        let d0 = [0.0, 1e-6];
+        let (f0, st, _) = at(d0);
+        assert_eq!(st, ContactState::Slip);
+        assert!(close(f0[1], 750.0, 1e3), "{f0:?}");
+        let fr = chord_law(law.springs(1.0), committed.force[0], d0, f0, st);
+        assert_eq!(fr.state, ContactState::Slip);
+        let slope = 1.5e8;
+        assert!(
+            close(fr.t[1][1], slope, kn) && close(fr.t[0][0], kn, kn),
+            "{:?}",
+            fr.t
+        );
+        assert!(fr.t[0][1] == 0.0 && fr.t[1][0] == 0.0);
+        // through both ends of the chord
+        assert_eq!(fr.force(d0), f0);
+        let g = fr.force([0.0; 2]);
+        assert!(
+            close(g[0], -1000.0, 1e3) && close(g[1], 600.0, 1e3),
+            "{g:?}"
+        );
+        let kink = 150.0 / ks;
+        for s in [0.5 * kink, kink, 2.0 * kink] {
+            let (f, st, _) = at([0.0, s]);
+            let g = fr.force([0.0, s]);
+            let err = if s <= kink {
+                assert_eq!(st, ContactState::Stick);
+                (ks - slope) * s
+            } else {
+                assert_eq!(st, ContactState::Slip);
+                150.0 - slope * s
+            };
+            assert!(
+                close(f[1] - g[1], err, 1e3),
+                "s {s}: law {f:?}, frozen {g:?}"
+            );
+            assert!(close(f[0], g[0], 1e3), "s {s}: law {f:?}, frozen {g:?}");
+        }
+        assert!(close((ks - slope) * kink, 93.75, 1e3));
+    }
 }

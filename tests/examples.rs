@@ -2,10 +2,7 @@
 //! non-overlapping polygons), has contacts wherever blocks should touch (every free block
 //! touches another block), runs to its end and writes its results.
 //!
-//! The Eindhoven walls (`eindhoven*`, bricks meshed at 26 mm, 1–3 minutes each along
-//! their push) run here with the push shortened to its first 0.4 mm in 4 increments,
-//! still by their dissipation-based arc length: their whole paths are the ignored sweeps
-//! of tests/validation_eindhoven.rs (docs/performance.md).
+//! The Eindhoven walls run here with their push shortened (`common::example_scene`).
 
 mod common;
 use std::process::Command;
@@ -25,23 +22,10 @@ fn every_example_runs() {
         let dir = common::tmp_dir(&format!("example_{name}"));
         let mut cmd = Command::new(common::dfem_bin());
         cmd.arg("run");
-        if name.starts_with("eindhoven") {
-            let short = text
-                .replace(
-                    "push_displacement = [0.004, 0.0]",
-                    "push_displacement = [0.0004, 0.0]",
-                )
-                .replace("load_steps = 80", "load_steps = 4");
-            assert_ne!(
-                short, *text,
-                "{name}: the push to shorten is not in the example"
-            );
-            let file = dir.join("scene.toml");
-            std::fs::write(&file, short).unwrap();
-            cmd.arg(file);
-        } else {
-            cmd.args(["--example", name]);
-        }
+        match common::example_scene(name, text, &dir) {
+            Some(file) => cmd.arg(file),
+            None => cmd.args(["--example", name]),
+        };
         let out = cmd.args(["--quiet", "--out"]).arg(&dir).output().unwrap();
         assert!(
             out.status.success(),

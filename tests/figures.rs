@@ -54,8 +54,14 @@ fn every_example_draws_its_figures_and_plot_redraws_them() {
     for (name, _, text) in dfem::scene::examples::EXAMPLES {
         let dir = common::tmp_dir(&format!("figures_{name}"));
         let d = dir.to_str().unwrap();
+        // the Eindhoven walls with their push shortened (`common::example_scene`)
+        let scene = common::example_scene(name, text, &dir);
+        let run = match &scene {
+            Some(file) => vec!["run", file.to_str().unwrap()],
+            None => vec!["run", "--example", name],
+        };
         ok(
-            &dfem(&["run", "--example", name, "--quiet", "--out", d]),
+            &dfem(&[run.as_slice(), &["--quiet", "--out", d]].concat()),
             name,
         );
         let figs = dir.join("figures");

@@ -280,3 +280,29 @@ pub fn dynamic_history(text: &str) -> dfem::analysis::dynamics::History {
     );
     out.history.expect("a dynamic run has a history")
 }
+
+/// The scene file `dfem run` is given for built-in example `name` in the tests that run
+/// every example, written into `dir`: the example itself (`None`: run `--example name`),
+/// except the Eindhoven walls (`eindhoven*`, 12–35 minutes each along their whole 4 mm
+/// push), whose push is shortened to its first 0.4 mm in 4 increments, still by their
+/// dissipation-based arc length: their whole paths are the ignored sweeps of
+/// tests/validation_eindhoven.rs (docs/performance.md).
+#[allow(dead_code)]
+pub fn example_scene(name: &str, text: &str, dir: &std::path::Path) -> Option<PathBuf> {
+    if !name.starts_with("eindhoven") {
+        return None;
+    }
+    let short = text
+        .replace(
+            "push_displacement = [0.004, 0.0]",
+            "push_displacement = [0.0004, 0.0]",
+        )
+        .replace("load_steps = 80", "load_steps = 4");
+    assert_ne!(
+        short, text,
+        "{name}: the push to shorten is not in the example"
+    );
+    let file = dir.join("scene.toml");
+    std::fs::write(&file, short).unwrap();
+    Some(file)
+}

@@ -416,3 +416,85 @@ fn dissipation_arc_length_follows_the_snap_back_and_dissipates_gf1() {
     // in most of them)
     assert!((w - g).abs() < 0.01 * g, "dissipated {w} J against {g} J");
 }
+
+/// The laws' history in the outcome (`Outcome::contact_history`, written to
+/// contacts_NNNN.vtu as `fracture_energy_spent` and `cap_plastic_displacement_m`):
+/// (a) pulled open by 50 µm, the joint's spent fraction of G_f^I is ξ = 1 − σ/fₜ at
+/// every contact (pure mode I: ds = −s fₜ du_p / G_f^I, σ = s fₜ), with σ the closed
+/// form of [`pull_stress`]; (b) pressed down past the cap's first yield with the top
+/// block's motion prescribed (the base fixed, so every contact closes by the push δ), the
+/// plastic relative displacement on the cap is the root κ₃ of kₙ (δ − κ₃) = σ̄(κ₃), the
+/// hardening branch of Eq. C2 written out here: σ̄ = fₘ/3 + (2fₘ/3) √(2x − x²),
+/// x = κ₃/κₚ ≤ 1.
+#[test]
+fn the_outcome_records_each_contacts_spent_energy_and_cap_plastic_displacement() {
+    // (a) 50 µm in 20 increments: the opening is well past fₜ/kₙ = 3 µm
+    let u = 50e-6;
+    let sc = common::scene(&scene(None, 0.0, &format!("[0.0, {u}]"), 20));
+    let (mesh, out) = common::solve(&sc);
+    assert_eq!(out.status, Status::Stable, "{:?}", out.status);
+    let s = pull_stress(u);
+    assert!(s < 0.9 * FT, "still near the peak: {s} Pa");
+    for (k, c) in mesh.contacts.iter().enumerate() {
+        let xi = out.contact_history[k][0];
+        let sigma = out.contact_forces[k][0] / (c.length * T);
+        // the increments converge to 1e-6 of the force: 1e-4 of fₜ is far above it
+        assert!(
+            (xi - (1.0 - sigma / FT)).abs() < 1e-4 && (xi - (1.0 - s / FT)).abs() < 1e-4,
+            "contact {k}: ξ = {xi}, σ = {sigma} Pa, closed form {s} Pa"
+        );
+        assert_eq!(out.contact_history[k][1], 0.0, "no compression, no cap");
+    }
+
+    // (b) the Eindhoven cap (fₘ = 10.5 N/mm², C_ss = 9, G_fc = 5 N/mm, κₚ = 0.093 mm)
+    let (fm, kp) = (10.5e6, 0.093e-3);
+    let cap = format!(
+        "compressive_strength = {fm}\ncap_shear_factor = 9.0\ncompressive_fracture_energy = 5000.0\ncap_peak_displacement = {kp}\n"
+    );
+    let sigma_bar = |k: f64| {
+        let x = k / kp;
+        fm / 3.0 + 2.0 * fm / 3.0 * (2.0 * x - x * x).sqrt()
+    };
+    // κ₃ = κₚ/2 at the end: δ = κ₃ + σ̄(κ₃)/kₙ
+    let delta = 0.5 * kp + sigma_bar(0.5 * kp) / KN;
+    let text = scene(None, 0.0, &format!("[0.0, {}]", -delta), 20).replacen(
+        "[[block]]",
+        &format!("{cap}\n[[block]]"),
+        1,
+    );
+    let (mesh, out) = common::solve(&common::scene(&text));
+    assert_eq!(out.status, Status::Stable, "{:?}", out.status);
+    // the root of kₙ (δ − κ) = σ̄(κ) by bisection on [0, κₚ] (the left side falls, the
+    // right rises)
+    let (mut lo, mut hi) = (0.0, kp);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if KN * (delta - mid) > sigma_bar(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let kappa = 0.5 * (lo + hi);
+    assert!((kappa - 0.5 * kp).abs() < 1e-9 * kp, "{kappa}");
+    assert!(!mesh.contacts.is_empty());
+    eprintln!(
+        "cap: κ₃ {:?} m against {kappa} m",
+        out.contact_history.iter().map(|h| h[1]).collect::<Vec<_>>()
+    );
+    for (k, c) in mesh.contacts.iter().enumerate() {
+        let [xi, k3] = out.contact_history[k];
+        let sigma = out.contact_forces[k][0] / (c.length * T);
+        // the force converges to 1e-6 of itself; dσ̄/dκ at κₚ/2 is 4.3e10 Pa/m, so κ₃
+        // is within ~2e-10 m (5e-6 of it): 1e-4 is far above both
+        assert!(
+            (k3 - kappa).abs() < 1e-4 * kappa,
+            "contact {k}: κ₃ = {k3} m, closed form {kappa} m"
+        );
+        assert!(
+            (sigma + sigma_bar(kappa)).abs() < 1e-4 * fm,
+            "contact {k}: σ = {sigma} Pa"
+        );
+        assert!(xi.abs() < 1e-9, "no tension or slip, nothing spent: {xi}");
+    }
+}

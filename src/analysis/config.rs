@@ -28,6 +28,14 @@ pub struct Committed {
 }
 
 impl Committed {
+    /// The history variables of the first `n` contacts: [`Committed::history`], with
+    /// zero for the contacts past its end.
+    pub fn history_of_all(&self, n: usize) -> Vec<crate::material::History> {
+        (0..n)
+            .map(|k| self.history.get(k).copied().unwrap_or_default())
+            .collect()
+    }
+
     pub fn zero(mesh: &Mesh) -> Self {
         Committed {
             stress: vec![[0.0; 3]; mesh.triangles.len()],

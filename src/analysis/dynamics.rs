@@ -1579,6 +1579,7 @@ impl<'a> Dynamics<'a> {
                 .map(|k| self.true_force(k))
                 .collect(),
             contact_states: self.committed.state.clone(),
+            contact_history: self.committed.history_of_all(self.committed.state.len()),
             stats: self.stats.clone(),
             load_factor: None,
             mechanism: None,

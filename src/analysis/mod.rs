@@ -108,6 +108,12 @@ pub struct Outcome {
     /// Per contact: normal and shear force (N), normal positive in tension.
     pub contact_forces: Vec<[f64; 2]>,
     pub contact_states: Vec<ContactState>,
+    /// Per contact: the history variables of its law ([`crate::material::History`]):
+    /// the spent fraction ξ of a softening joint's fracture energy (0–1) and the plastic
+    /// relative displacement κ₃ on its compression cap (m, docs/theory.md Eq. C2), zero
+    /// for laws without history. Both only grow, so they record what a contact went
+    /// through during the run (a toe that crushed and then unloaded keeps its κ₃).
+    pub contact_history: Vec<crate::material::History>,
     pub stats: Stats,
     /// Capacity: the critical load factor λ (last converged).
     pub load_factor: Option<f64>,

@@ -1625,6 +1625,7 @@ impl<'a> Driver<'a> {
             stress: self.committed.stress.clone(),
             contact_forces: self.committed.force.clone(),
             contact_states: self.committed.state.clone(),
+            contact_history: self.committed.history_of_all(self.cur.contacts.len()),
             stats: self.stats.clone(),
             load_factor,
             mechanism,

@@ -179,6 +179,19 @@ pub fn write_step(
         "state_0stick_1slip_2open",
         out.contact_states.iter().map(|st| st.code() as i64),
     );
+    // the laws' history (Outcome::contact_history): what each contact went through
+    data_array(
+        &mut s,
+        "fracture_energy_spent",
+        1,
+        out.contact_history.iter().map(|h| h[0]),
+    );
+    data_array(
+        &mut s,
+        "cap_plastic_displacement_m",
+        1,
+        out.contact_history.iter().map(|h| h[1]),
+    );
     s.push_str("</CellData>\n");
     s.push_str(TAIL);
     write_atomic(&dir.join(format!("contacts_{step:04}.vtu")), s.as_bytes())

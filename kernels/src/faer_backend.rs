@@ -503,8 +503,11 @@ pub struct FaerCholesky(CholeskyCore, LowRankCorrection);
 /// this limit (ranks ≤ 66), 0.80 with a limit of 256 (ranks ≤ 108: the held factor is
 /// kept longer and the change grows; both timed in one window), and on the 10⁵-unknown
 /// rigid wall 0.14–0.17 at ranks 18–46 (docs/performance.md, "The low-rank correction in
-/// the static driver").
-pub const CHANGED_MAX_RANK: usize = 128;
+/// the static driver"). The static driver keeps the change of a small model lower
+/// itself (`Driver::low_rank_limit` in src/analysis/statics.rs: a limit that grows with
+/// √n); this one bounds the largest, where a change of rank 180 still costs well under a
+/// refactorization.
+pub const CHANGED_MAX_RANK: usize = 256;
 
 /// Sparse LDLᵀ without pivoting (faer). Negative pivots are accepted (indefinite
 /// matrices without a zero leading minor still factor); an exactly zero pivot gives

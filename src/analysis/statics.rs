@@ -59,6 +59,14 @@ pub struct Settings {
     pub initial_step: f64,
     pub bracket: f64,
     pub line_search: bool,
+    /// Keep the held secant factorization across load increments (`reuse_across_increments`,
+    /// default off): the first corrections of an increment are then solved by conjugate
+    /// gradients preconditioned with it, corrected for the contacts that changed state
+    /// ([`Driver::reuse`], docs/theory.md "Factorizations across increments"), instead of
+    /// a refactorization. Fewer factorizations, but on the walls of docs/performance.md no
+    /// faster (P2) or never taken (10⁵ unknowns: hundreds of contacts change state
+    /// between increments), hence off.
+    pub reuse_across_increments: bool,
     /// Displacement control (`push_block`, `push_displacement`), if any.
     pub push: Option<Push>,
     /// Arc-length path following of the push (`path = "arc_length"`), if any.
@@ -185,6 +193,14 @@ impl Settings {
                 .get("line_search")
                 .and_then(|v| v.as_bool())
                 .unwrap_or(strategy != Strategy::Initial),
+            reuse_across_increments: match x.get("reuse_across_increments") {
+                None => false,
+                Some(v) => v.as_bool().ok_or_else(|| {
+                    Error::new("reuse_across_increments is not true or false")
+                        .place(place("reuse_across_increments"))
+                        .fix("write reuse_across_increments = true (or false, the default)")
+                })?,
+            },
             push: Push::from_scene(scene)?,
             arc: None,
         }
@@ -237,6 +253,7 @@ pub const KEYS: &[&str] = &[
     "initial_step",
     "bracket",
     "line_search",
+    "reuse_across_increments",
     "push_block",
     "push_displacement",
     "gravity_steps",
@@ -273,6 +290,25 @@ pub struct Driver<'a> {
     /// unknown pinned and nothing added since (`None`: unknown), for
     /// [`System::stiffness_update`].
     kbuf_local: Option<Vec<LocalStiffness>>,
+    /// A second persistent matrix buffer, on `cur` as `kbuf`: the matrix that the held
+    /// secant factorization corrected for a low-rank change solves with
+    /// ([`Driver::near_into_aux`]), while `kbuf` holds the iteration matrix; with what
+    /// `aux_local` says it holds, as `kbuf_local`.
+    aux: CsrMatrix,
+    aux_local: Option<Vec<LocalStiffness>>,
+    /// The values of the secant matrix that the main backend holds factorized
+    /// (`Held::Secant`), and whether it was assembled on `cur` (false once a converged
+    /// increment moved the geometry, [`Driver::commit`]).
+    held_values: Vec<f64>,
+    held_current: bool,
+    /// The secant matrix in the held factorization's contact states assembled on `cur`,
+    /// when that factorization is of an older geometry (computed once per increment,
+    /// [`Driver::near_into_aux`]; empty: not yet).
+    held_on_cur: Vec<f64>,
+    /// GMRES on the held secant factorization failed on a tangent step of the current
+    /// increment: the increment's later tangent steps do not try it again
+    /// ([`Driver::tangent_with_secant_factor`]).
+    gmres_failed: bool,
     /// Out-of-balance norm (N) that counts as converged in the current iteration
     /// (tolerance × the force scale): a tangent correction by GMRES is solved to a tenth of
     /// it ([`Driver::tangent_with_secant_factor`]).
@@ -395,16 +431,22 @@ const TANGENT_TOLERANCE: f64 = 1e-3;
 /// Conjugate-gradient iterations after which the reused factorization stops paying and the
 /// secant matrix is refactorized.
 const REUSE_MAX_ITERATIONS: usize = 8;
-/// A secant correction is solved with the held factorization corrected for the change
-/// ([`Driver::changed`]) when at most this many contacts changed state since it was
-/// computed (each a change of rank ≤ 2, so up to the backend's own rank limit,
-/// `dfem_kernels::faer_backend::CHANGED_MAX_RANK` = 128, which refuses the larger
-/// changes). Measured on the rigid P2 wall of docs/performance.md (each correction timed
+/// On the rigid P2 wall a secant correction is solved with the held factorization
+/// corrected for the change ([`Driver::changed`]) when at most this many contacts changed
+/// state since it was computed (each a change of rank ≤ 2); larger models allow more
+/// ([`Driver::low_rank_limit`]). Measured on the rigid P2 wall of docs/performance.md (each correction timed
 /// in the driver, one window): with 64 (and rank 128) the corrections change a median 22
 /// contacts and cost 0.45 of a refactorization; with 128 (and rank 256) the held factor
 /// is kept longer, the corrections change a median 55 contacts and cost 0.80 of one,
 /// for 39 factorizations instead of 47.
 const LOW_RANK_MAX_CHANGES: usize = 64;
+/// Unknowns of the rigid P2 wall, where [`LOW_RANK_MAX_CHANGES`] was measured. The
+/// break-even rank of the correction grows with the model ([`Driver::low_rank_limit`]).
+const LOW_RANK_REFERENCE_DOFS: f64 = 4860.0;
+/// The most contacts a low-rank correction takes on any model: the backend refuses ranks
+/// above its own limit (`dfem_kernels::faer_backend::CHANGED_MAX_RANK` = 256), and a
+/// contact that changed state is a change of rank 1 or 2.
+const LOW_RANK_CAP: usize = 256;
 /// Relative residual of a correction computed with a reused factorization: far below the
 /// out-of-balance tolerances (≥ 1e-8), so the iterations see no difference.
 const REUSE_TOLERANCE: f64 = 1e-10;
@@ -460,6 +502,7 @@ impl<'a> Driver<'a> {
         let t = scene.model.thickness;
         let area = mesh.contacts.iter().map(|c| c.length * t).collect();
         let kbuf = CsrMatrix::zeros(system.plan.pattern().clone());
+        let aux = kbuf.clone();
         Ok(Driver {
             scene,
             settings,
@@ -470,6 +513,12 @@ impl<'a> Driver<'a> {
             committed: Committed::zero(mesh),
             kbuf,
             kbuf_local: None,
+            aux,
+            aux_local: None,
+            held_values: Vec::new(),
+            held_current: false,
+            held_on_cur: Vec::new(),
+            gmres_failed: false,
             converged_norm: 0.0,
             stats: Stats {
                 dofs: mesh.n_dofs,
@@ -528,6 +577,23 @@ impl<'a> Driver<'a> {
         states: &[ContactState],
         newton: bool,
     ) -> Vec<LocalStiffness> {
+        self.local_of(&trial.force, states, newton)
+    }
+
+    /// The contacts' secant local stiffness matrices (N/m) in the given states (those of
+    /// [`Driver::local_stiffness`] without `newton`, which need no trial).
+    fn secant_local(&self, states: &[ContactState]) -> Vec<LocalStiffness> {
+        self.local_of(&[], states, false)
+    }
+
+    /// [`Driver::local_stiffness`] with the contact forces `force` (N; read for the sign of
+    /// the shear force when `newton`).
+    fn local_of(
+        &self,
+        force: &[[f64; 2]],
+        states: &[ContactState],
+        newton: bool,
+    ) -> Vec<LocalStiffness> {
         (0..self.area.len())
             .map(|k| {
                 let law = self.law.get(k);
@@ -547,7 +613,7 @@ impl<'a> Driver<'a> {
                     ContactState::Open => [[0.0, 0.0], [0.0, 0.0]],
                     ContactState::Slip if newton => {
                         // Fₛ = ±(cA − Fₙ tan φ): ∂Fₛ/∂δₙ = ∓ tan φ kₙ
-                        let sg = trial.force[k][1].signum();
+                        let sg = force[k][1].signum();
                         [[s.kn, 0.0], [-sg * law.tan_phi() * s.kn, 0.0]]
                     }
                     ContactState::Slip => [[s.kn, 0.0], [0.0, 0.0]],
@@ -684,7 +750,7 @@ impl<'a> Driver<'a> {
                     if let Some(x) = self.reuse(states, r) {
                         return Ok(Some(x));
                     }
-                    self.held = Held::Secant(states.to_vec());
+                    self.hold_secant(states);
                 }
                 let backend: &mut dyn LinearBackend = if newton {
                     if self.lu.is_none() {
@@ -729,24 +795,110 @@ impl<'a> Driver<'a> {
     /// stiffnesses, only the contacts whose local stiffness changed are assembled again
     /// ([`System::stiffness_update`]: bit-identical to a whole assembly).
     fn assemble_kbuf(&mut self, local: Vec<LocalStiffness>) {
+        Self::assemble(
+            &self.system,
+            &self.cur,
+            &self.pins,
+            local,
+            &mut self.kbuf,
+            &mut self.kbuf_local,
+        );
+    }
+
+    /// [`Driver::assemble_kbuf`] into `aux` (the second buffer, tracked by `aux_local`).
+    fn assemble_aux(&mut self, local: Vec<LocalStiffness>) {
+        Self::assemble(
+            &self.system,
+            &self.cur,
+            &self.pins,
+            local,
+            &mut self.aux,
+            &mut self.aux_local,
+        );
+    }
+
+    /// Assemble the matrix of the local stiffnesses `local` on `mesh` into `out`, with the
+    /// unknowns `pins` taken out; `out_local`: what `out` holds (`None`: unknown), for
+    /// the update of only the contacts that changed.
+    fn assemble(
+        system: &System,
+        mesh: &Mesh,
+        pins: &[(usize, f64)],
+        local: Vec<LocalStiffness>,
+        out: &mut CsrMatrix,
+        out_local: &mut Option<Vec<LocalStiffness>>,
+    ) {
         let few = |prev: &[LocalStiffness]| {
             let changed = prev.iter().zip(&local).filter(|(a, b)| a != b).count();
             UPDATE_MAX_SHARE * changed <= local.len()
         };
-        match self.kbuf_local.take() {
-            Some(prev) if self.pins.is_empty() && few(&prev) => {
-                self.system
-                    .stiffness_update(&self.cur, &prev, &local, &mut self.kbuf)
+        match out_local.take() {
+            Some(prev) if pins.is_empty() && few(&prev) => {
+                system.stiffness_update(mesh, &prev, &local, out)
             }
-            _ => self
-                .system
-                .stiffness_into(&self.cur, &local, &mut self.kbuf),
+            _ => system.stiffness_into(mesh, &local, out),
         }
-        if self.pins.is_empty() {
-            self.kbuf_local = Some(local);
+        if pins.is_empty() {
+            *out_local = Some(local);
         } else {
-            Self::pin_rows(&self.pins, &mut self.kbuf);
+            Self::pin_rows(pins, out);
         }
+    }
+
+    /// Record that the main backend holds (or is about to hold) the factorization of
+    /// `kbuf`, the secant matrix in `states` on `cur`.
+    fn hold_secant(&mut self, states: &[ContactState]) {
+        self.held = Held::Secant(states.to_vec());
+        self.held_values.clone_from(&self.kbuf.values);
+        self.held_current = true;
+        self.held_on_cur.clear();
+    }
+
+    /// `aux` ← the matrix that the held secant factorization, of H = K_s(held states) on
+    /// its own geometry, is to be corrected to ([`LinearBackend::solve_changed`]) for the
+    /// secant matrix K_s(`states`) on `cur`: K_s(`states`) itself when the factorization
+    /// is of `cur`; on an older geometry, H plus the change of state on `cur`,
+    ///
+    ///   N = H + K_s(`states`) − K_s(held states)   (entry by entry; H where the two agree),
+    ///
+    /// a change of H on the contacts that changed state only (rank ≤ 2 each), which the
+    /// backend's low-rank correction accepts, and near K_s(`states`): the two differ by
+    /// the geometry's change over the increments since the factorization (mm on m-sized
+    /// blocks), which the conjugate gradients of [`Driver::reuse`] or the GMRES of
+    /// [`Driver::tangent_with_secant_factor`] iterate on. `in_kbuf`: `kbuf` holds
+    /// K_s(`states`) (else it is assembled into `aux`). `false` when no secant
+    /// factorization is held.
+    fn near_into_aux(&mut self, states: &[ContactState], in_kbuf: bool) -> bool {
+        let Held::Secant(held_states) = &self.held else {
+            return false;
+        };
+        if !self.held_current && self.held_on_cur.is_empty() {
+            let local = self.secant_local(&held_states.clone());
+            self.assemble_aux(local);
+            self.held_on_cur.clone_from(&self.aux.values);
+        }
+        if in_kbuf {
+            self.aux.values.copy_from_slice(&self.kbuf.values);
+            self.aux_local.clone_from(&self.kbuf_local);
+        } else {
+            let local = self.secant_local(states);
+            self.assemble_aux(local);
+        }
+        if !self.held_current {
+            // exactly H where the contact states agree, so that the change read by the
+            // backend is the changed contacts' alone
+            for ((a, h), b) in self
+                .aux
+                .values
+                .iter_mut()
+                .zip(&self.held_values)
+                .zip(&self.held_on_cur)
+            {
+                *a = if *a == *b { *h } else { h + (*a - b) };
+            }
+            self.aux_local = None;
+        }
+        true
     }
 
     /// The tangent correction K_t⁻¹ r of the secant strategy (a symmetric secant matrix
@@ -761,6 +913,12 @@ impl<'a> Driver<'a> {
         states: &[ContactState],
         r: &[f64],
     ) -> Option<Vec<f64>> {
+        if self.gmres_failed {
+            // it failed earlier in this increment: on the 10⁶-unknown wall of
+            // docs/performance.md it then failed at every later tangent step of the
+            // increment (31 in a row, 30 iterations each)
+            return None;
+        }
         if !matches!(self.held, Held::Secant(_)) {
             let local = self.local_stiffness(trial, states, false);
             self.assemble_kbuf(local);
@@ -770,19 +928,17 @@ impl<'a> Driver<'a> {
             if !ok {
                 return None;
             }
-            self.held = Held::Secant(states.to_vec());
+            self.hold_secant(states);
         }
-        // the secant matrix in `states`, when the held factorization is of a few contacts
-        // in other states on the same geometry: GMRES is then preconditioned with the
+        // the secant matrix in `states` (in `aux`), when the held factorization is of a
+        // few contacts in other states (on this geometry or, corrected for the change of
+        // state, an older one: `near_into_aux`): GMRES is then preconditioned with the
         // factorization corrected for them (`LinearBackend::solve_changed`), which leaves
-        // the friction–normal coupling of the slipping contacts alone to iterate on
+        // the friction–normal coupling of the slipping contacts alone to iterate on (and
+        // the geometry's change)
         let near = match self.changed_since_factor(states) {
-            Some(c) if c > 0 && c <= LOW_RANK_MAX_CHANGES => {
-                let local = self.local_stiffness(trial, states, false);
-                self.assemble_kbuf(local);
-                Some(self.kbuf.clone())
-            }
-            _ => None,
+            Some(c) if c > 0 && c <= self.low_rank_limit() => self.near_into_aux(states, false),
+            _ => false,
         };
         let local = self.local_stiffness(trial, states, true);
         self.assemble_kbuf(local);
@@ -793,16 +949,16 @@ impl<'a> Driver<'a> {
         let rn = Self::norm(r);
         let tolerance =
             (0.1 * self.converged_norm / rn.max(1e-300)).clamp(REUSE_TOLERANCE, TANGENT_TOLERANCE);
-        let (out, corrected) = match &near {
-            Some(near) => crate::solve::reuse::gmres_with_changed_factor(
+        let (out, corrected) = match near {
+            true => crate::solve::reuse::gmres_with_changed_factor(
                 &self.kbuf,
-                near,
+                &self.aux,
                 &mut *self.backend,
                 r,
                 tolerance,
                 TANGENT_MAX_ITERATIONS,
             ),
-            None => (
+            false => (
                 crate::solve::reuse::gmres_with_factor(
                     &self.kbuf,
                     &mut *self.backend,
@@ -813,7 +969,13 @@ impl<'a> Driver<'a> {
                 false,
             ),
         };
-        let out = out?;
+        let Some(out) = out else {
+            self.gmres_failed = true;
+            if super::tracing() {
+                eprintln!("  tangent by GMRES failed (corrected preconditioner: {corrected})");
+            }
+            return None;
+        };
         // a step of the size of the model: K_t singular up to round-off, as in `correction`
         let size = self.model_size();
         if out.x.iter().any(|v| v.abs() > 0.1 * size) {
@@ -839,10 +1001,28 @@ impl<'a> Driver<'a> {
         Some(states.iter().zip(now).filter(|(a, b)| a != b).count())
     }
 
+    /// The most contacts changed state since the held factorization for which the
+    /// low-rank correction ([`Driver::changed`], and across increments [`Driver::reuse`])
+    /// is tried instead of a refactorization: [`LOW_RANK_MAX_CHANGES`] × √(n / n_P2), n the
+    /// unknowns, between [`LOW_RANK_MAX_CHANGES`] and [`LOW_RANK_CAP`]. A correction of
+    /// rank r costs about r solves restricted to the paths of the changed unknowns to the
+    /// root of the elimination tree, whose top separators (√n unknowns on a wall, dense)
+    /// make a path cost ∝ n, while a nested-dissection factorization of a wall costs
+    /// ∝ n^1.5: the break-even rank grows as √n. Measured (docs/performance.md, "The
+    /// low-rank correction in the static driver"): a correction at 0.45 of a
+    /// refactorization for a median 22 changed contacts on the rigid P2 wall (4,860
+    /// unknowns), at 0.13–0.17 for 39 on the 10⁵-unknown wall. The size of the model alone
+    /// decides (no timing), so that the results do not depend on the machine.
+    fn low_rank_limit(&self) -> usize {
+        let n = self.kbuf.pattern.n() as f64;
+        let scaled = LOW_RANK_MAX_CHANGES as f64 * (n / LOW_RANK_REFERENCE_DOFS).sqrt();
+        (scaled as usize).clamp(LOW_RANK_MAX_CHANGES, LOW_RANK_CAP)
+    }
+
     /// The secant correction K_s⁻¹ r by the held secant factorization corrected exactly
     /// for the contacts that changed state since it was computed
     /// ([`LinearBackend::solve_changed`]: the Woodbury identity inside the factor, no
-    /// iteration), when between 1 and [`LOW_RANK_MAX_CHANGES`] did (`kbuf` holds the new
+    /// iteration), when between 1 and [`Driver::low_rank_limit`] did (`kbuf` holds the new
     /// K_s). Within an increment the iteration matrix changes only by those contacts'
     /// stiffness (it is assembled on the last converged geometry, see
     /// [`Driver::correction`]); across increments every entry changes and the backend
@@ -852,7 +1032,7 @@ impl<'a> Driver<'a> {
     /// refactorization.
     fn changed(&mut self, now: &[ContactState], r: &[f64]) -> Option<Vec<f64>> {
         let changed = self.changed_since_factor(now)?;
-        if changed == 0 || changed > LOW_RANK_MAX_CHANGES {
+        if changed == 0 || changed > self.low_rank_limit() || !self.held_current {
             return None;
         }
         let start = std::time::Instant::now();
@@ -879,22 +1059,43 @@ impl<'a> Driver<'a> {
     /// the new K_s). `None`: refactorize.
     fn reuse(&mut self, now: &[ContactState], r: &[f64]) -> Option<Vec<f64>> {
         let changed = self.changed_since_factor(now)?;
-        if changed > REUSE_MAX_CHANGES {
+        // across increments (the factorization of an older geometry) the held factor
+        // corrected for the change of state (`near_into_aux`) preconditions, up to the
+        // low-rank path's limit of changed contacts
+        let across = !self.held_current && changed > 0 && self.settings.reuse_across_increments;
+        let limit = if across {
+            self.low_rank_limit()
+        } else {
+            REUSE_MAX_CHANGES
+        };
+        if changed > limit {
             if super::tracing() {
                 eprintln!("  refactorization: {changed} contacts changed");
             }
             return None;
         }
-        let out = crate::solve::reuse::solve_with_factor(
-            &self.kbuf,
-            &mut *self.backend,
-            r,
-            REUSE_TOLERANCE,
-            REUSE_MAX_ITERATIONS,
-        );
+        let out = if across && self.near_into_aux(now, true) {
+            crate::solve::reuse::solve_with_changed_factor(
+                &self.kbuf,
+                &self.aux,
+                &mut *self.backend,
+                r,
+                REUSE_TOLERANCE,
+                REUSE_MAX_ITERATIONS,
+            )
+        } else {
+            crate::solve::reuse::solve_with_factor(
+                &self.kbuf,
+                &mut *self.backend,
+                r,
+                REUSE_TOLERANCE,
+                REUSE_MAX_ITERATIONS,
+            )
+        };
         if super::tracing() {
             eprintln!(
-                "  PCG on the held factor: {changed} contacts changed, {:?} iterations",
+                "  PCG on the held factor: {changed} contacts changed, {} geometry, {:?} iterations",
+                if self.held_current { "same" } else { "older" },
                 out.as_ref().map(|o| o.iterations)
             );
         }
@@ -991,6 +1192,7 @@ impl<'a> Driver<'a> {
         let mut best_rn = f64::INFINITY;
         let mut best_it = 0;
         let mut tangent_only = false;
+        self.gmres_failed = false;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
             let r = self.out_of_balance(f_ext, &trial.f_int);
@@ -1148,7 +1350,7 @@ impl<'a> Driver<'a> {
                     && !super::singular_pivots(&*self.backend)
                     && self.backend.solve(&mut x).is_ok()
                     && x.iter().all(|v| v.is_finite());
-                self.held = Held::Secant(trial.state.clone());
+                self.hold_secant(&trial.state);
                 let x = if ok {
                     Some(x)
                 } else {
@@ -1456,6 +1658,12 @@ impl<'a> Driver<'a> {
         self.committed.history = trial.history;
         self.cur = trial.mesh;
         self.kbuf_local = None;
+        self.aux_local = None;
+        // a held secant factorization is now of an older geometry: across increments it
+        // preconditions (Driver::reuse) with the change of state corrected
+        self.held_current = false;
+        self.held_on_cur.clear();
+        self.gmres_failed = false;
         for (t, p) in self.presc_total.iter_mut().zip(presc) {
             t[0] += p[0];
             t[1] += p[1];

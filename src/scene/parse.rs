@@ -147,6 +147,7 @@ pub const ANALYSIS_KEYS: &[&str] = &[
     "initial_step",
     "bracket",
     "line_search",
+    "reuse_across_increments",
     "push_block",
     "push_displacement",
     "gravity_steps",

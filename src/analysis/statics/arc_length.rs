@@ -221,6 +221,10 @@ const CHECK_SAME: f64 = 1e-3;
 /// The secant iterations on δλ of the dissipation constraint in one correction.
 const SECANT_STEPS: usize = 4;
 
+/// A correction on the arc ([`Driver::corrector`]): the norm of the out-of-balance force
+/// after it (N), the new increment of the unknowns, its δλ (N) and the trial there.
+type Correction = (f64, Vec<f64>, f64, Trial);
+
 /// Why an arc-length increment failed.
 enum StepFailure {
     /// Not converged: the relative out-of-balance force left.
@@ -528,7 +532,7 @@ impl Driver<'_> {
         lam: f64,
         constraint: Constraint,
         tangent: bool,
-    ) -> Result<Option<(f64, Vec<f64>, f64, Trial)>> {
+    ) -> Result<Option<Correction>> {
         let Some((dr, dp)) = self.solve_pair(trial, r, p, tangent)? else {
             return Ok(None);
         };
@@ -591,7 +595,7 @@ impl Driver<'_> {
         (p, base): (&[f64], &[f64]),
         dq: &[f64],
         lam: f64,
-    ) -> (f64, Vec<f64>, f64, Trial) {
+    ) -> Correction {
         let zero = vec![[0.0; 2]; self.cur.blocks.len()];
         let delta: Vec<f64> = dq
             .iter()

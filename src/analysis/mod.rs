@@ -64,6 +64,11 @@ pub struct Stats {
     /// factorization would have been too large (`TANGENT_LU_MAX_ENTRIES` in
     /// src/analysis/statics.rs): the secant correction was taken instead.
     pub tangent_lu_skipped: usize,
+    /// Numeric LU factorizations of a tangent matrix (the static driver's Newton
+    /// corrections, and its secant strategy's tangent ones that GMRES on the secant
+    /// factorization did not solve; every tangent correction of the arc-length path);
+    /// included in `factorizations`.
+    pub tangent_factorizations: usize,
     /// Increments of the secant strategy that went on with tangent (Newton) steps after
     /// the secant iterations stalled.
     pub tangent_fallbacks: usize,

@@ -392,6 +392,35 @@ enum Held {
     Secant(Vec<ContactState>),
 }
 
+/// The external force along a line search ([`Driver::line_search_along`]) at the step
+/// length α.
+enum Load<'v> {
+    /// Fixed (N): the static driver's increments.
+    Fixed(&'v [f64]),
+    /// `base` + (`lam` + α `dlam`) `p` (N): the arc-length corrector, whose load factor
+    /// λ moves by δλ = `dlam` along the full step (docs/theory.md, "Arc length").
+    Along {
+        base: &'v [f64],
+        p: &'v [f64],
+        lam: f64,
+        dlam: f64,
+    },
+}
+
+impl Load<'_> {
+    /// The external force (N) at the step length `alpha`.
+    fn at(&self, alpha: f64) -> std::borrow::Cow<'_, [f64]> {
+        match self {
+            Load::Fixed(f) => std::borrow::Cow::Borrowed(f),
+            Load::Along { base, p, lam, dlam } => base
+                .iter()
+                .zip(p.iter())
+                .map(|(b, q)| b + (lam + alpha * dlam) * q)
+                .collect(),
+        }
+    }
+}
+
 /// A secant correction reuses the held factorization as a preconditioner when at most this
 /// many contacts changed state since it was computed. Each changed contact is a rank-1 or
 /// rank-2 change of K, and conjugate gradients need about one iteration per unit of rank
@@ -1469,8 +1498,8 @@ impl<'a> Driver<'a> {
     }
 
     /// Backtracking on the out-of-balance norm along `delta` from `dq` over the step
-    /// lengths 1, ½, … 2^(1 − `steps`): the best of the tried steps (norm, trial,
-    /// increment).
+    /// lengths 1, ½, … 2^(1 − `steps`) (one step without `line_search`), the external
+    /// force `f_ext` fixed: the best of the tried steps (norm, trial, increment).
     fn line_search(
         &self,
         dq: &[f64],
@@ -1480,14 +1509,34 @@ impl<'a> Driver<'a> {
         presc: &[Point],
         steps: usize,
     ) -> (f64, Trial, Vec<f64>) {
+        let steps = if self.settings.line_search { steps } else { 1 };
+        let (rn2, t, cand, _) =
+            self.line_search_along(dq, delta, rn, &Load::Fixed(f_ext), presc, steps);
+        (rn2, t, cand)
+    }
+
+    /// Backtracking on the out-of-balance norm along `delta` from `dq` over the step
+    /// lengths α = 1, ½, … 2^(1 − `steps`), the external force moving with α as `load`
+    /// says (the static driver's [`Driver::line_search`], the arc-length corrector's
+    /// backtracking): the first step that does not raise the norm above `rn` (N), else
+    /// the best of them, as (its norm, its trial, the increment, α).
+    fn line_search_along(
+        &self,
+        dq: &[f64],
+        delta: &[f64],
+        rn: f64,
+        load: &Load,
+        presc: &[Point],
+        steps: usize,
+    ) -> (f64, Trial, Vec<f64>, f64) {
         let mut alpha = 1.0;
-        let mut best: Option<(f64, Trial, Vec<f64>)> = None;
-        for _ in 0..if self.settings.line_search { steps } else { 1 } {
+        let mut best: Option<(f64, Trial, Vec<f64>, f64)> = None;
+        for _ in 0..steps {
             let cand: Vec<f64> = dq.iter().zip(delta).map(|(a, b)| a + alpha * b).collect();
             let t = self.trial(&cand, presc);
-            let rn2 = Self::norm(&self.out_of_balance(f_ext, &t.f_int));
+            let rn2 = Self::norm(&self.out_of_balance(&load.at(alpha), &t.f_int));
             if best.as_ref().is_none_or(|b| rn2 < b.0) {
-                best = Some((rn2, t, cand));
+                best = Some((rn2, t, cand, alpha));
             }
             if rn2 <= rn {
                 break;
@@ -1880,6 +1929,9 @@ pub fn run_with_progress<'a>(
         d.stats.factorizations = bs.numeric_factorizations
             + d.lu
                 .as_ref()
+                .map_or(0, |l| l.stats().numeric_factorizations);
+        d.stats.tangent_factorizations =
+            d.lu.as_ref()
                 .map_or(0, |l| l.stats().numeric_factorizations);
         d.stats.symbolic_factorizations = bs.symbolic_factorizations
             + d.lu

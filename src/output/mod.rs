@@ -118,6 +118,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "low_rank_corrections": s.low_rank_corrections,
             "low_rank_max_rank": s.low_rank_max_rank,
             "tangent_lu_skipped": s.tangent_lu_skipped,
+            "tangent_factorizations": s.tangent_factorizations,
             "tangent_fallbacks": s.tangent_fallbacks,
             "free_motions": s.free_motions,
             "contact_releases": s.contact_releases,

@@ -221,6 +221,10 @@ const CHECK_SAME: f64 = 1e-3;
 /// The secant iterations on δλ of the dissipation constraint in one correction.
 const SECANT_STEPS: usize = 4;
 
+/// A correction on the arc ([`Driver::corrector`]): the norm of the out-of-balance force
+/// after it (N), the new increment of the unknowns, its δλ (N) and the trial there.
+type Correction = (f64, Vec<f64>, f64, Trial);
+
 /// Why an arc-length increment failed.
 enum StepFailure {
     /// Not converged: the relative out-of-balance force left.
@@ -515,7 +519,7 @@ impl Driver<'_> {
     /// along the line ([`Driver::dissipation_root`]) — and backtracking (the best of the
     /// steps 1, ½, …, 2⁻¹¹ of [`BACKTRACK_STEPS`] where the full one raises the
     /// out-of-balance force). Returns (the norm of the
-    /// out-of-balance force after it, the new dq, its δλ), or `None` when the matrix
+    /// out-of-balance force after it, the new dq, its δλ, its trial), or `None` when the matrix
     /// cannot be factorized or the line meets no point of the cylinder.
     #[allow(clippy::too_many_arguments)]
     fn corrector(
@@ -528,7 +532,7 @@ impl Driver<'_> {
         lam: f64,
         constraint: Constraint,
         tangent: bool,
-    ) -> Result<Option<(f64, Vec<f64>, f64)>> {
+    ) -> Result<Option<Correction>> {
         let Some((dr, dp)) = self.solve_pair(trial, r, p, tangent)? else {
             return Ok(None);
         };
@@ -579,7 +583,8 @@ impl Driver<'_> {
 
     /// The best of the steps α = 1, ½, …, 2⁻¹¹ ([`BACKTRACK_STEPS`]) from `dq` towards
     /// `w` + δλ `dp` at the load factor `lam` + α δλ (the first that does not raise the
-    /// out-of-balance force above `rn`): (its out-of-balance force, the iterate, α δλ).
+    /// out-of-balance force above `rn`; [`Driver::line_search_along`]): (its
+    /// out-of-balance force, the iterate, α δλ, the iterate's trial).
     #[allow(clippy::too_many_arguments)]
     fn backtrack(
         &self,
@@ -590,33 +595,23 @@ impl Driver<'_> {
         (p, base): (&[f64], &[f64]),
         dq: &[f64],
         lam: f64,
-    ) -> (f64, Vec<f64>, f64) {
+    ) -> Correction {
         let zero = vec![[0.0; 2]; self.cur.blocks.len()];
-        let mut best: Option<(f64, Vec<f64>, f64)> = None;
-        let mut alpha = 1.0;
-        for _ in 0..BACKTRACK_STEPS {
-            let cand: Vec<f64> = dq
-                .iter()
-                .zip(w)
-                .zip(dp)
-                .map(|((q, wi), pi)| q + alpha * (wi + dl * pi - q))
-                .collect();
-            let fe: Vec<f64> = base
-                .iter()
-                .zip(p)
-                .map(|(b, q)| b + (lam + alpha * dl) * q)
-                .collect();
-            let t = self.trial(&cand, &zero);
-            let rn2 = Self::norm(&self.out_of_balance(&fe, &t.f_int));
-            if best.as_ref().is_none_or(|b| rn2 < b.0) {
-                best = Some((rn2, cand, alpha * dl));
-            }
-            if rn2 <= rn {
-                break;
-            }
-            alpha *= 0.5;
-        }
-        best.expect("BACKTRACK_STEPS > 0 steps tried")
+        let delta: Vec<f64> = dq
+            .iter()
+            .zip(w)
+            .zip(dp)
+            .map(|((q, wi), pi)| wi + dl * pi - q)
+            .collect();
+        let load = Load::Along {
+            base,
+            p,
+            lam,
+            dlam: dl,
+        };
+        let (rn2, t, cand, alpha) =
+            self.line_search_along(dq, &delta, rn, &load, &zero, BACKTRACK_STEPS);
+        (rn2, cand, alpha * dl, t)
     }
 
     /// One arc-length increment under `constraint` from the committed state at the load
@@ -702,10 +697,16 @@ impl Driver<'_> {
         let mut last_check = f64::INFINITY;
         // the checks of Eq. F2 in a row that have not lowered it
         let mut stuck = 0;
+        let mut carried: Option<Trial> = None;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
             let fe = f_ext(lam0 + dlam);
-            let mut trial = self.trial(&dq, &zero);
+            // the trial of the iterate, which the backtracking of the last correction
+            // evaluated (the frozen laws have not changed since)
+            let mut trial = match carried.take() {
+                Some(t) => t,
+                None => self.trial(&dq, &zero),
+            };
             let mut r = self.out_of_balance(&fe, &trial.f_int);
             let mut scale = self.force_scale(&fe, &trial.f_int);
             let mut rn = Self::norm(&r);
@@ -843,7 +844,7 @@ impl Driver<'_> {
                 }
             }
             if super::super::tracing() {
-                if let Some((_, next, dl_it)) = &pick {
+                if let Some((_, next, dl_it, _)) = &pick {
                     let (k, m) = next
                         .iter()
                         .zip(&dq)
@@ -853,11 +854,12 @@ impl Driver<'_> {
                     eprintln!("  step: tangent {tangent_rn:?} secant {secant_rn:?}, largest move {m:.3e} at unknown {k}, δλ {dl_it:.3e}");
                 }
             }
-            let Some((_, next, dl_it)) = pick else {
+            let Some((_, next, dl_it, t)) = pick else {
                 return Ok(Err(StepFailure::NoConvergence(residual)));
             };
             dq = next;
             dlam += dl_it;
+            carried = Some(t);
             let dmax = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             if !dmax.is_finite() || dmax > 0.5 * size {
                 return Ok(Err(StepFailure::Divergence));

@@ -92,6 +92,7 @@ fn every_file_has_a_test() {
 cases! {
     softening_without_fracture_energy,
     cap_without_softening,
+    line_search_not_boolean,
     cap_energy_without_peak,
     within_unknown,
     tension_cut_off_beyond_apex,

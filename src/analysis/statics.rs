@@ -177,6 +177,17 @@ impl Settings {
             })?,
         };
         let num = |k: &str, d: f64, lo: f64, hi: f64| super::analysis_number(scene, k, d, lo, hi);
+        // an `[analysis]` switch: true or false, `d` when absent
+        let switch = |k: &str, d: bool| -> Result<bool> {
+            match x.get(k) {
+                None => Ok(d),
+                Some(v) => v.as_bool().ok_or_else(|| {
+                    Error::new(format!("'{k}' must be true or false"))
+                        .place(place(k))
+                        .fix(format!("write {k} = true or {k} = false (default {d})"))
+                }),
+            }
+        };
         let default_iters = if strategy == Strategy::Initial {
             2000.0
         } else {
@@ -189,18 +200,8 @@ impl Settings {
             max_cuts: num("max_cuts", 6.0, 0.0, 30.0)? as usize,
             initial_step: num("initial_step", 0.05, 1e-9, 1e3)?,
             bracket: num("bracket", 1e-3, 1e-9, 0.5)?,
-            line_search: x
-                .get("line_search")
-                .and_then(|v| v.as_bool())
-                .unwrap_or(strategy != Strategy::Initial),
-            reuse_across_increments: match x.get("reuse_across_increments") {
-                None => false,
-                Some(v) => v.as_bool().ok_or_else(|| {
-                    Error::new("reuse_across_increments is not true or false")
-                        .place(place("reuse_across_increments"))
-                        .fix("write reuse_across_increments = true (or false, the default)")
-                })?,
-            },
+            line_search: switch("line_search", strategy != Strategy::Initial)?,
+            reuse_across_increments: switch("reuse_across_increments", false)?,
             push: Push::from_scene(scene)?,
             arc: None,
         }

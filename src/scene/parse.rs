@@ -1447,6 +1447,18 @@ fn parse_analysis(
     ] {
         extra.remove(k);
     }
+    // the static driver's switches (read by `analysis::statics::Settings`, which checks
+    // them again for scenes built without a file): checked here to name their line
+    for k in ["line_search", "reuse_across_increments"] {
+        if extra.get(k).is_some_and(|v| v.as_bool().is_none()) {
+            return Err(err_at(
+                src.key_line(at, k),
+                format!("[analysis] key '{k}'"),
+                format!("'{k}' must be true or false"),
+                format!("write {k} = true or {k} = false"),
+            ));
+        }
+    }
     let frame = match t.get("frame") {
         None => ground_motion::Frame::Relative,
         Some(v) => {

@@ -136,6 +136,13 @@ pub trait LinearBackend: Send {
             operation: "solves with a changed matrix (solve_changed)",
         })
     }
+    /// The values (in the pattern's storage order) of the matrix whose factorization the
+    /// backend holds, for a caller that builds the matrix a
+    /// [`LinearBackend::solve_changed`] is to correct it to; `None` when no factorization
+    /// is held or the backend does not keep them (the default).
+    fn factorized_values(&self) -> Option<&[f64]> {
+        None
+    }
     /// Near-null space of the matrices to come: for elasticity of blocky structures, the
     /// rigid-body modes (METHOD.md §2: two translations and the rotation about each
     /// block's centroid, restricted to that block's unknowns), as dense vectors of length n.

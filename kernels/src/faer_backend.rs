@@ -701,6 +701,10 @@ chol_backend!(
             stats.max_changed_rank = stats.max_changed_rank.max(rank);
         }
         out
+    },
+    fn factorized_values(&self) -> Option<&[f64]> {
+        let an = self.0.analysis.as_ref().filter(|an| an.factored)?;
+        Some(&an.last_values)
     }
 );
 chol_backend!(FaerLdlt, "faer-ldlt", "faer-ldlt-metis");

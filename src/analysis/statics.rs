@@ -297,10 +297,9 @@ pub struct Driver<'a> {
     /// `aux_local` says it holds, as `kbuf_local`.
     aux: CsrMatrix,
     aux_local: Option<Vec<LocalStiffness>>,
-    /// The values of the secant matrix that the main backend holds factorized
-    /// (`Held::Secant`), and whether it was assembled on `cur` (false once a converged
-    /// increment moved the geometry, [`Driver::commit`]).
-    held_values: Vec<f64>,
+    /// Whether the secant matrix that the main backend holds factorized (`Held::Secant`;
+    /// its values: [`LinearBackend::factorized_values`]) was assembled on `cur` (false
+    /// once a converged increment moved the geometry, [`Driver::commit`]).
     held_current: bool,
     /// The secant matrix in the held factorization's contact states assembled on `cur`,
     /// when that factorization is of an older geometry (computed once per increment,
@@ -545,7 +544,6 @@ impl<'a> Driver<'a> {
             kbuf_local: None,
             aux,
             aux_local: None,
-            held_values: Vec::new(),
             held_current: false,
             held_on_cur: Vec::new(),
             gmres_failed: false,
@@ -879,7 +877,6 @@ impl<'a> Driver<'a> {
     /// `kbuf`, the secant matrix in `states` on `cur`.
     fn hold_secant(&mut self, states: &[ContactState]) {
         self.held = Held::Secant(states.to_vec());
-        self.held_values.clone_from(&self.kbuf.values);
         self.held_current = true;
         self.held_on_cur.clear();
     }
@@ -897,11 +894,15 @@ impl<'a> Driver<'a> {
     /// blocks), which the conjugate gradients of [`Driver::reuse`] or the GMRES of
     /// [`Driver::tangent_with_secant_factor`] iterate on. `in_kbuf`: `kbuf` holds
     /// K_s(`states`) (else it is assembled into `aux`). `false` when no secant
-    /// factorization is held.
+    /// factorization is held, or the backend does not give its values (then it offers no
+    /// `solve_changed` either).
     fn near_into_aux(&mut self, states: &[ContactState], in_kbuf: bool) -> bool {
         let Held::Secant(held_states) = &self.held else {
             return false;
         };
+        if self.backend.factorized_values().is_none() {
+            return false;
+        }
         if !self.held_current && self.held_on_cur.is_empty() {
             let local = self.secant_local(&held_states.clone());
             self.assemble_aux(local);
@@ -917,13 +918,11 @@ impl<'a> Driver<'a> {
         if !self.held_current {
             // exactly H where the contact states agree, so that the change read by the
             // backend is the changed contacts' alone
-            for ((a, h), b) in self
-                .aux
-                .values
-                .iter_mut()
-                .zip(&self.held_values)
-                .zip(&self.held_on_cur)
-            {
+            let held = self
+                .backend
+                .factorized_values()
+                .expect("checked above; nothing factorized since");
+            for ((a, h), b) in self.aux.values.iter_mut().zip(held).zip(&self.held_on_cur) {
                 *a = if *a == *b { *h } else { h + (*a - b) };
             }
             self.aux_local = None;
@@ -1104,7 +1103,11 @@ impl<'a> Driver<'a> {
             }
             return None;
         }
-        let out = if across && self.near_into_aux(now, true) {
+        let out = if across {
+            if !self.near_into_aux(now, true) {
+                // the backend gives no corrected factor: refactorize
+                return None;
+            }
             crate::solve::reuse::solve_with_changed_factor(
                 &self.kbuf,
                 &self.aux,

@@ -498,3 +498,67 @@ fn the_outcome_records_each_contacts_spent_energy_and_cap_plastic_displacement()
         assert!(xi.abs() < 1e-9, "no tension or slip, nothing spent: {xi}");
     }
 }
+
+/// (d) Dilatancy (docs/theory.md, Eq. D1): the block pressed by σ₀ = −0.3 MPa, then
+///     pushed 0.4 mm sideways in 800 increments with its height and rotation held, the
+///     joint dilating with tan ψ₀ = 0.5 up to σᵤ = 2 MPa. On the shear surface the held
+///     height takes back the plastic opening, so whatever the cohesion does
+///
+///         σ(u_p) = −σᵤ + (σ₀ + σᵤ) exp(−kₙ tan ψ₀ u_p / σᵤ),   u_p = u − H/(kₛ A)
+///
+///     (the plastic slip: the push less the joint's elastic shear). The beam's vertical
+///     reaction is the compression built up: σ A = F_y − |σ₀| A. Backward Euler over
+///     increments of ≤ 0.5 µm of slip against the decay length σᵤ/(kₙ tan ψ₀) = 49 µm
+///     lags by ≤ 0.5/98 of σ + σᵤ ≤ 1.7 MPa, 8.7 kPa: the tolerance is 0.5 % of σᵤ.
+///     Without the dilatancy (the same push) the compression stays σ₀.
+#[test]
+fn a_held_dilating_joint_builds_up_compression_to_the_dilatancy_stress() {
+    let (s0, su, tpsi): (f64, f64, f64) = (-0.3e6, 2e6, 0.5);
+    let ks = 36e9;
+    let mut ends = Vec::new();
+    for dilates in [true, false] {
+        let keys = if dilates {
+            format!(
+                "dilatancy_angle = {}\ndilatancy_stress = {su}\n",
+                tpsi.atan().to_degrees()
+            )
+        } else {
+            String::new()
+        };
+        let text = scene(None, s0 * AREA, "[4e-4, 0.0]", 800).replacen(
+            "[[block]]",
+            &format!("{keys}\n[[block]]"),
+            1,
+        );
+        let (_, out) = common::solve(&common::scene(&text));
+        assert_eq!(out.status, Status::Stable, "{:?}", out.status);
+        let pts = curve(&out);
+        assert_eq!(pts.len(), 801);
+        let mut worst = 0.0_f64;
+        let mut slipping = 0;
+        for p in &pts {
+            // the compression carried: the load plus the beam's reaction
+            let sigma = s0 + p[3] / AREA;
+            let up = p[0] - p[2] / (ks * AREA);
+            if up < 1e-9 {
+                // elastic: the held height keeps σ₀
+                assert!((sigma - s0).abs() < 1e-6 * su, "σ = {sigma} Pa before slip");
+                continue;
+            }
+            slipping += 1;
+            let exact = if dilates {
+                -su + (s0 + su) * (-KN * tpsi * up / su).exp()
+            } else {
+                s0
+            };
+            worst = worst.max((sigma - exact).abs());
+        }
+        eprintln!("dilatancy {dilates}: {slipping} slipping points, σ off the closed form by ≤ {worst:.1} Pa, end σ {:.0} Pa", s0 + pts[800][3] / AREA);
+        assert!(slipping > 700, "{slipping} slipping points");
+        assert!(worst < 5e-3 * su, "σ off the closed form by {worst} Pa");
+        ends.push(s0 + pts[800][3] / AREA);
+    }
+    // 0.4 mm of slip is 8 decay lengths: the dilating joint is within 0.1 % of σᵤ
+    assert!((ends[0] + su).abs() < 2e-3 * su, "{ends:?}");
+    assert!((ends[1] - s0).abs() < 1e-6 * su, "{ends:?}");
+}

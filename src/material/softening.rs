@@ -9,7 +9,11 @@
 //! kₛ = Gₛ/h in N/m³) and the history ξ (the spent fraction of the fracture energy,
 //! 0 ≤ ξ ≤ 1; s = 1 − ξ the remaining fraction of the strengths):
 //! * tension surface f₁ = σ − s fₜ, associated flow: plastic opening Δλ₁;
-//! * shear surface f₂ = |τ| + σ tan φ − s c, no dilatancy: plastic slip Δλ₂;
+//! * shear surface f₂ = |τ| + σ tan φ − s c: plastic slip Δλ₂, and with a dilatancy
+//!   ([`Dilatancy`], docs/theory.md Eq. D1) the plastic opening Δλ₂ tan ψ(σ) with
+//!   tan ψ(σ) = tan ψ₀ ⟨1 + σ/σᵤ⟩ (σ ≤ 0; tan ψ₀ in tension): the joint dilates as it
+//!   slips, less under compression, not at all beyond σᵤ (Lourenço and Rots 1997;
+//!   Van Zijl 2004). Without it the flow is along τ alone (no dilatancy);
 //! * softening: dξ = (s fₜ dλ₁)/G_f^I + (s c dλ₂)/G_f^II, the work spent against the
 //!   tensile strength and against the cohesion, each over its own fracture energy (the
 //!   linear mixed-mode energy criterion). Within an increment s′ = s exp(−fₜ Δλ₁/G_f^I −
@@ -44,6 +48,29 @@ pub struct Softening {
     pub fracture_energy_ii: f64,
     /// The compression cap, if any.
     pub cap: Option<Cap>,
+    /// The dilatancy of the shear surface, if any (none: slip without opening).
+    pub dilatancy: Option<Dilatancy>,
+}
+
+/// The dilatancy of a slipping joint (docs/theory.md, Eq. D1): the plastic opening per
+/// unit plastic slip, tan ψ(σ) = tan ψ₀ ⟨1 + σ/σᵤ⟩ under compression (σ < 0) and tan ψ₀
+/// in tension, so that a joint pressed by σᵤ or more slips without opening. Held between
+/// stiff supports, a dilating joint presses them harder as it slips; the compression it
+/// builds up that way stops at σᵤ (the closed form of the test
+/// `confined_slip_builds_compression_up_to_the_dilatancy_stress`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dilatancy {
+    /// tan ψ₀, the dilatancy at zero normal stress (≥ 0).
+    pub tan_psi: f64,
+    /// σᵤ (Pa, > 0): the compression at which the dilatancy vanishes.
+    pub stress: f64,
+}
+
+impl Dilatancy {
+    /// tan ψ(σ) at the normal stress `sig` (Pa, compression negative).
+    pub fn tan_at(&self, sig: f64) -> f64 {
+        self.tan_psi * (1.0 + sig / self.stress).clamp(0.0, 1.0)
+    }
 }
 
 /// Which surfaces of tension and shear are active in a return.
@@ -56,6 +83,47 @@ enum Active {
 
 /// Bisection steps of the scalar return equation: the bracket [0, s] shrinks to 2⁻⁶⁰ s.
 const BISECTIONS: usize = 60;
+
+/// The root of an increasing `f` on [lo, hi] with f(lo) ≤ 0 < f(hi) = `f_hi`, by the
+/// Illinois variant of regula falsi (superlinear on smooth pieces, the bracket kept),
+/// to 10⁻¹⁴ of the bracket's scale or at most 200 steps.
+fn increasing_root(mut lo: f64, mut hi: f64, mut f_hi: f64, f: impl Fn(f64) -> f64) -> f64 {
+    let mut f_lo = f(lo);
+    if f_lo >= 0.0 {
+        return lo;
+    }
+    let tol = 1e-14 * (lo.abs() + hi.abs());
+    let mut side = 0;
+    for _ in 0..200 {
+        let x = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        let x = if x > lo && x < hi { x } else { 0.5 * (lo + hi) };
+        let fx = f(x);
+        if fx == 0.0 {
+            return x;
+        }
+        if fx < 0.0 {
+            (lo, f_lo) = (x, fx);
+            if side == -1 {
+                f_hi *= 0.5;
+            }
+            side = -1;
+        } else {
+            (hi, f_hi) = (x, fx);
+            if side == 1 {
+                f_lo *= 0.5;
+            }
+            side = 1;
+        }
+        if hi - lo <= tol {
+            break;
+        }
+    }
+    if f_hi.abs() < f_lo.abs() {
+        hi
+    } else {
+        lo
+    }
+}
 
 /// The result of a return: stresses (Pa), remaining fraction s′ and the cap's history κ₃
 /// (m).
@@ -83,7 +151,35 @@ impl Softening {
                     c.fracture_energy.map(|g| (g, c.peak_displacement)),
                 )
             }),
+            dilatancy: (j.dilatancy_angle > 0.0).then(|| Dilatancy {
+                tan_psi: j.dilatancy_angle.to_radians().tan(),
+                stress: j.dilatancy_stress,
+            }),
         }
+    }
+
+    /// The normal stress σ (Pa) after a slip return at the remaining fraction `r` from
+    /// the trial (σ*, |τ*|), with the normal stiffness `kn` (N/m³) and the shear
+    /// stiffness `ks`: the root of σ − σ* + kₙ tan ψ(σ) Δλ₂(σ) = 0, Δλ₂ = ⟨|τ*| − t(σ)⟩/kₛ,
+    /// t(σ) = ⟨r c − σ tan φ⟩ (Eq. D1, backward Euler). The left side increases with σ
+    /// (a more compressed joint resists more slip and dilates less), is ≥ 0 at σ* and
+    /// ≤ 0 at min(σ*, −σᵤ): the Illinois variant of regula falsi (this return runs inside
+    /// the bisections on s′ and on the cap's multiplier, so plain bisection here would
+    /// multiply their 60–80 evaluations by another 60). σ* itself without a dilatancy.
+    fn slip_normal(&self, sig: f64, tau: f64, r: f64, kn: f64, ks: f64) -> f64 {
+        let Some(d) = self.dilatancy else {
+            return sig;
+        };
+        let (c, tp) = (self.cohesion, self.tan_phi);
+        let h = |sg: f64| {
+            let t = (r * c - sg * tp).max(0.0);
+            sg - sig + kn * d.tan_at(sg) * ((tau - t) / ks).max(0.0)
+        };
+        let hi = h(sig);
+        if hi <= 0.0 {
+            return sig;
+        }
+        increasing_root(sig.min(-d.stress), sig, hi, h)
     }
 
     /// kₙ = Eₙ/h and kₛ = Gₛ/h (N/m³).
@@ -113,13 +209,17 @@ impl Softening {
                     (s1, tau, (sig - s1) / kn, 0.0)
                 }
                 Active::Shear => {
-                    let t = (r * c - sig * tp).max(0.0);
-                    (sig, t, 0.0, (tau - t) / ks)
+                    let sg = self.slip_normal(sig, tau, r, kn, ks);
+                    let t = (r * c - sg * tp).max(0.0);
+                    (sg, t, 0.0, (tau - t) / ks)
                 }
                 Active::Both => {
                     let s1 = r * ft;
                     let t = (r * c - s1 * tp).max(0.0);
-                    (s1, t, (sig - s1) / kn, (tau - t) / ks)
+                    let l2 = (tau - t) / ks;
+                    // the opening past the strength less the slip's dilatancy
+                    let dil = self.dilatancy.map_or(0.0, |d| d.tan_at(s1) * l2.max(0.0));
+                    (s1, t, (sig - s1) / kn - dil, l2)
                 }
             }
         };
@@ -176,8 +276,14 @@ impl Softening {
         let at = |t: f64| {
             let lam = t / (2.0 * kn);
             let d = 1.0 + 2.0 * lam * ks * css;
-            let sg = sig / (1.0 + t);
-            let (_, ta, r) = self.ret(sg, tau / d, s, (kn, ks / d), Active::Shear);
+            // σ (1 + 2Δλ₃kₙ) = σ* − kₙ Δλ₂ tan ψ: the slip return with kₙ/(1 + 2Δλ₃kₙ)
+            let (sg, ta, r) = self.ret(
+                sig / (1.0 + t),
+                tau / d,
+                s,
+                (kn / (1.0 + t), ks / d),
+                Active::Shear,
+            );
             let k = kappa + cap.plastic_length(lam, sg, ta);
             (sg, ta, r, k)
         };
@@ -357,6 +463,7 @@ mod tests {
             fracture_energy_i: 18.0,
             fracture_energy_ii: 125.0,
             cap: None,
+            dilatancy: None,
         }
     }
 
@@ -664,5 +771,71 @@ mod tests {
         assert_eq!(st, ContactState::Slip);
         assert!((g[0] + 82e9 * 1e-5).abs() < 1e-3);
         assert!((g[1] - 0.75 * 82e9 * 1e-5).abs() < 1e-3);
+    }
+
+    /// A joint pressed to σ₀ = −0.5 MPa, its normal relative displacement then held, and
+    /// sheared in steps of 10 nm, with the cohesion spent (c = fₜ = 0: pure friction) and
+    /// the dilatancy tan ψ₀ = 0.5, σᵤ = 2 MPa (Eq. D1). On the friction line the plastic
+    /// opening tan ψ(σ) du_p is taken back by the held normal displacement, dσ = −kₙ
+    /// tan ψ₀ (1 + σ/σᵤ) du_p, so
+    ///
+    /// ```text
+    /// σ(u_p) = −σᵤ + (σ₀ + σᵤ) exp(−kₙ tan ψ₀ u_p / σᵤ),   τ = −σ tan φ
+    /// ```
+    ///
+    /// with u_p = δₛ − τ/kₛ the plastic slip: the compression builds up towards σᵤ and no
+    /// further. Backward Euler over steps of du_p ≤ 10 nm against the decay length
+    /// L = σᵤ/(kₙ tan ψ₀) = 49 µm lags by at most du_p/(2L) of σ + σᵤ ≤ 1.5 MPa, 153 Pa:
+    /// the tolerance is 10⁻⁴ σᵤ = 200 Pa (measured: 41 Pa). Without the dilatancy the
+    /// same path keeps σ = σ₀.
+    #[test]
+    fn confined_slip_builds_compression_up_to_the_dilatancy_stress() {
+        let (kn, ks, tp) = (82e9, 36e9, 0.75);
+        let (s0, su, tpsi) = (-0.5e6, 2e6, 0.5);
+        let base = Softening {
+            cohesion: 0.0,
+            tensile_strength: 0.0,
+            ..eindhoven()
+        };
+        let dilating = Softening {
+            dilatancy: Some(Dilatancy {
+                tan_psi: tpsi,
+                stress: su,
+            }),
+            ..base
+        };
+        for (m, dilates) in [(dilating, true), (base, false)] {
+            let (mut f, mut h) = ([s0, 0.0], [0.0; 2]);
+            let (mut ds, mut worst, mut slipped) = (0.0, 0.0_f64, 0);
+            for _ in 0..30_000 {
+                let step = 1e-8;
+                let (g, st, hh) = m.update_history(1.0, f, h, [0.0, step]);
+                (f, h, ds) = (g, hh, ds + step);
+                if st != ContactState::Slip {
+                    assert!(
+                        f[1] < -s0 * tp * (1.0 + 1e-9),
+                        "sticks below the friction line"
+                    );
+                    continue;
+                }
+                slipped += 1;
+                let up = ds - f[1] / ks;
+                let exact = if dilates {
+                    -su + (s0 + su) * (-kn * tpsi * up / su).exp()
+                } else {
+                    s0
+                };
+                worst = worst.max((f[0] - exact).abs());
+                assert!((f[1] + f[0] * tp).abs() < 1e-6 * su, "τ = −σ tan φ");
+            }
+            assert!(slipped > 25_000, "{slipped} slipping steps");
+            assert!(worst < 1e-4 * su, "σ off the closed form by {worst} Pa");
+            if dilates {
+                // 270 µm of slip, 5.5 decay lengths: within 0.5 % of σᵤ
+                assert!((f[0] + su).abs() < 0.005 * su, "σ = {} Pa at the end", f[0]);
+            } else {
+                assert_eq!(f[0], s0);
+            }
+        }
     }
 }

@@ -84,6 +84,10 @@ pub struct Joint {
     pub fracture_energy_ii: f64,
     /// The compression cap of a softening joint (`compressive_strength`), if any.
     pub cap: Option<JointCap>,
+    /// Dilatancy angle ψ₀ of a softening joint, degrees (`dilatancy_angle`; 0: none).
+    pub dilatancy_angle: f64,
+    /// σᵤ, Pa (`dilatancy_stress`): the compression at which the dilatancy vanishes.
+    pub dilatancy_stress: f64,
     /// Contacts between two blocks of one masonry unit (the halves of a split brick)
     /// take this joint (`within = "unit"`).
     pub within_unit: bool,

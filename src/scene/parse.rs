@@ -75,6 +75,8 @@ struct RawJoint {
     cap_shear_factor: Option<f64>,
     compressive_fracture_energy: Option<f64>,
     cap_peak_displacement: Option<f64>,
+    dilatancy_angle: Option<f64>,
+    dilatancy_stress: Option<f64>,
     within: Option<String>,
     blocks: Option<Vec<String>>,
 }
@@ -461,6 +463,8 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
             (gf1, gf2)
         };
         let cap = joint_cap(&src, at, &place, j, softening)?;
+        let (dilatancy_angle, dilatancy_stress) =
+            joint_dilatancy(&src, at, &place, j, softening, friction_angle)?;
         let within_unit = match j.within.as_deref() {
             None => false,
             Some("unit") => true,
@@ -487,6 +491,8 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
             fracture_energy_i,
             fracture_energy_ii,
             cap,
+            dilatancy_angle,
+            dilatancy_stress,
             within_unit,
             blocks: Vec::new(),
         });
@@ -1246,6 +1252,59 @@ fn joint_cap(
         fracture_energy,
         peak_displacement,
     }))
+}
+
+/// `dilatancy_angle` (degrees, 0 ≤ ψ₀ ≤ φ) and `dilatancy_stress` (Pa, > 0, required
+/// with ψ₀ > 0) of a softening joint: (ψ₀, σᵤ), (0, 0) without dilatancy.
+fn joint_dilatancy(
+    src: &Src,
+    at: usize,
+    place: &str,
+    j: &RawJoint,
+    softening: JointSoftening,
+    friction_angle: f64,
+) -> Result<(f64, f64)> {
+    let Some(psi) = j.dilatancy_angle else {
+        if j.dilatancy_stress.is_some() {
+            return Err(err_at(
+                src.key_line(at, "dilatancy_stress"),
+                format!("{place} key 'dilatancy_stress'"),
+                "dilatancy_stress is given without dilatancy_angle",
+                "add dilatancy_angle = <degrees> (the dilatancy at zero normal stress), or remove dilatancy_stress",
+            ));
+        }
+        return Ok((0.0, 0.0));
+    };
+    let psi = check_value(src, at, place, "dilatancy_angle", psi, false, "degrees")?;
+    if softening == JointSoftening::None {
+        return Err(err_at(
+            src.key_line(at, "dilatancy_angle"),
+            format!("{place} key 'dilatancy_angle'"),
+            "the dilatancy belongs to softening joints",
+            "add softening = \"exponential\" with the fracture energies, or remove dilatancy_angle",
+        ));
+    }
+    if psi > friction_angle {
+        return Err(err_at(
+            src.key_line(at, "dilatancy_angle"),
+            format!("{place} key 'dilatancy_angle'"),
+            format!("the dilatancy angle {psi}° exceeds the friction angle {friction_angle}°"),
+            "give a dilatancy angle between 0 and the friction angle (degrees)",
+        ));
+    }
+    if psi == 0.0 {
+        return Ok((0.0, 0.0));
+    }
+    let Some(su) = j.dilatancy_stress else {
+        return Err(err_at(
+            src.key_line(at, "dilatancy_angle"),
+            format!("{place} key 'dilatancy_angle'"),
+            "a dilatancy angle is given without dilatancy_stress",
+            "add dilatancy_stress = <Pa> (the compression at which the joint stops dilating; without it a held joint's compression would grow without bound as it slips)",
+        ));
+    };
+    let su = check_value(src, at, place, "dilatancy_stress", su, true, "Pa")?;
+    Ok((psi, su))
 }
 
 fn check_value(

@@ -83,7 +83,36 @@ pub fn secant_local(k: crate::material::ContactSprings, state: ContactState) -> 
 /// than as a difference of positions, which would lose the small relative displacements
 /// of stiff contacts to round-off.
 pub fn moved(cur: &Mesh, dq: &[f64], presc: &[Point]) -> (Mesh, Vec<Point>) {
-    let mut m = cur.clone();
+    moved_reusing(cur, dq, presc, None)
+}
+
+/// [`moved`], written into `spare` when one is given: a mesh of the same topology as `cur`
+/// (the same nodes, triangles, blocks and contacts, in other positions: a configuration
+/// moved from `cur` or from one it was moved from, as every trial of a static run is),
+/// whose memory it reuses instead of a copy of `cur` (about 1.5 MB on the 40 × 40 wall of
+/// docs/performance.md, at every trial). Only what moves is written: every node's
+/// position, every block's unknowns and centroid, every contact's normal; the result is
+/// [`moved`]'s to the bit. A spare whose sizes are not `cur`'s is dropped for a copy.
+pub fn moved_reusing(
+    cur: &Mesh,
+    dq: &[f64],
+    presc: &[Point],
+    spare: Option<Mesh>,
+) -> (Mesh, Vec<Point>) {
+    let sizes = |m: &Mesh| {
+        [
+            m.nodes.len(),
+            m.triangles.len(),
+            m.blocks.len(),
+            m.contacts.len(),
+            m.segments.len(),
+            m.n_dofs,
+        ]
+    };
+    let (mut m, copied) = match spare {
+        Some(s) if sizes(&s) == sizes(cur) => (s, false),
+        _ => (cur.clone(), true),
+    };
     let mut du = vec![[0.0; 2]; cur.nodes.len()];
     for (bi, b) in cur.blocks.iter().enumerate() {
         match b.dofs {
@@ -117,12 +146,17 @@ pub fn moved(cur: &Mesh, dq: &[f64], presc: &[Point]) -> (Mesh, Vec<Point>) {
                     centroid: cn,
                 };
                 m.blocks[bi].centroid = cn;
+                continue;
             }
         }
+        if !copied {
+            // a fixed or deformable block keeps its unknowns and its reference centroid
+            m.blocks[bi].dofs = b.dofs;
+            m.blocks[bi].centroid = b.centroid;
+        }
     }
-    for (p, d) in m.nodes.iter_mut().zip(&du) {
-        p[0] += d[0];
-        p[1] += d[1];
+    for ((p, c), d) in m.nodes.iter_mut().zip(&cur.nodes).zip(&du) {
+        *p = [c[0] + d[0], c[1] + d[1]];
     }
     m.update_normals();
     (m, du)
@@ -140,8 +174,27 @@ pub fn evaluate(
     dq: &[f64],
     presc: &[Point],
 ) -> Trial {
+    evaluate_reusing(
+        system, cur, committed, law, area, thickness, dq, presc, None,
+    )
+}
+
+/// [`evaluate`], the moved configuration written into `spare` if given
+/// ([`moved_reusing`]).
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_reusing(
+    system: &System,
+    cur: &Mesh,
+    committed: &Committed,
+    law: &dyn ContactLaws,
+    area: &[f64],
+    thickness: f64,
+    dq: &[f64],
+    presc: &[Point],
+    spare: Option<Mesh>,
+) -> Trial {
     use rayon::prelude::*;
-    let (mesh, du) = moved(cur, dq, presc);
+    let (mesh, du) = moved_reusing(cur, dq, presc, spare);
     let n = cur.n_dofs;
     // triangles: co-rotational CST
     let stress: Vec<[f64; 3]> = (0..cur.triangles.len())
@@ -185,29 +238,7 @@ pub fn evaluate(
             ]
         })
         .collect();
-    // contacts
-    let nc = cur.contacts.len();
-    let res: Vec<([f64; 2], ContactState, [f64; 2], crate::material::History)> = (0..nc)
-        .into_par_iter()
-        .with_min_len(256)
-        .map(|k| {
-            let c = &cur.contacts[k];
-            let rel = sub(du[c.node_m as usize], c.at_l(|n| du[n as usize]));
-            let n0 = c.normal;
-            let d = [
-                n0[0] * rel[0] + n0[1] * rel[1],
-                -n0[1] * rel[0] + n0[0] * rel[1],
-            ];
-            let h = committed.history.get(k).copied().unwrap_or([0.0; 2]);
-            let (f, st, h) = law.law(k).update_history(area[k], committed.force[k], h, d);
-            (f, st, d, h)
-        })
-        .collect();
-    let rel: Vec<[f64; 2]> = res.iter().map(|r| r.2).collect();
-    let force: Vec<[f64; 2]> = res.iter().map(|r| r.0).collect();
-    let state: Vec<ContactState> = res.iter().map(|r| r.1).collect();
-    let history: Vec<crate::material::History> = res.iter().map(|r| r.3).collect();
-    // internal force vector, serial in element order (deterministic)
+    // internal force vector, serial in element order (deterministic): the triangles
     let mut f_int = vec![0.0; n];
     for (t, tri) in mesh.triangles.iter().enumerate() {
         let x = tri.map(|k| mesh.nodes[k as usize]);
@@ -221,26 +252,47 @@ pub fn evaluate(
             }
         }
     }
-    // the contacts' shares of F_int (METHOD.md §3: Fₙ gₙ + Fₛ gₛ on each free unknown):
-    // their maps computed in parallel, a slice of contacts at a time (a few MB whatever
-    // the model's size), added serially in contact order: the same sums as adding them one
-    // contact at a time, bit for bit, for any number of threads
+    // the contacts: their laws, and their shares of F_int (METHOD.md §3: Fₙ gₙ + Fₛ gₛ on
+    // each free unknown, with the map of the moved configuration), computed in parallel
+    // into place, a slice of contacts at a time (1.2 MB of shares whatever the model's
+    // size); the shares added serially in contact order after the triangles: the same
+    // sums as adding them one contact at a time, bit for bit, for any number of threads
     const SLICE: usize = 8192;
-    let mut shares: Vec<Option<crate::assembly::ContactMap>> = Vec::new();
+    use crate::assembly::ContactShare;
+    let nc = cur.contacts.len();
+    let mut force = vec![[0.0; 2]; nc];
+    let mut state = vec![ContactState::Stick; nc];
+    let mut rel = vec![[0.0; 2]; nc];
+    let mut history: Vec<crate::material::History> = vec![[0.0; 2]; nc];
+    let mut shares = vec![ContactShare::NONE; SLICE.min(nc)];
     for start in (0..nc).step_by(SLICE) {
         let end = (start + SLICE).min(nc);
-        (start..end)
-            .into_par_iter()
+        let part = &mut shares[..end - start];
+        part.par_iter_mut()
+            .zip(&mut force[start..end])
+            .zip(&mut state[start..end])
+            .zip(&mut rel[start..end])
+            .zip(&mut history[start..end])
             .with_min_len(256)
-            .map(|k| {
-                (force[k] != [0.0, 0.0])
-                    .then(|| crate::assembly::contact_map(&mesh, &mesh.contacts[k]))
-            })
-            .collect_into_vec(&mut shares);
-        for (map, f) in shares.iter().zip(&force[start..end]) {
-            if let Some(map) = map {
-                crate::assembly::add_mapped_force(map, *f, &mut f_int);
-            }
+            .enumerate()
+            .for_each(|(i, ((((share, f), st), d), h))| {
+                let k = start + i;
+                let c = &cur.contacts[k];
+                let r = sub(du[c.node_m as usize], c.at_l(|n| du[n as usize]));
+                let n0 = c.normal;
+                *d = [n0[0] * r[0] + n0[1] * r[1], -n0[1] * r[0] + n0[0] * r[1]];
+                let h0 = committed.history.get(k).copied().unwrap_or([0.0; 2]);
+                (*f, *st, *h) = law
+                    .law(k)
+                    .update_history(area[k], committed.force[k], h0, *d);
+                if *f != [0.0, 0.0] {
+                    share.set(&crate::assembly::contact_map(&mesh, &mesh.contacts[k]), *f);
+                } else {
+                    share.clear();
+                }
+            });
+        for share in part.iter() {
+            share.add_to(&mut f_int);
         }
     }
     Trial {
@@ -252,5 +304,55 @@ pub fn evaluate(
         dq: dq.to_vec(),
         rel,
         history,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Unknowns (m, rad) that differ from unknown to unknown: `scale` × a fixed pattern.
+    fn pattern(n: usize, scale: f64) -> Vec<f64> {
+        (0..n)
+            .map(|i| scale * (0.3 + (i as f64 * 0.7).sin()))
+            .collect()
+    }
+
+    /// A configuration written into a spare is the copied one to the bit: every field of
+    /// the mesh (compared through its serialized form, which spells every float and its
+    /// sign in full), for rigid bricks and deformable ones on a fixed base moved by a
+    /// prescribed translation, the spare being another configuration of the same mesh
+    /// (moved by other unknowns, another base translation), and for a spare of another
+    /// mesh (dropped for a copy).
+    #[test]
+    fn moved_into_a_spare_is_the_copy() {
+        let scene = |rigid| {
+            let text = crate::scene::examples::scaled_wall(3, rigid);
+            let text = if rigid {
+                text
+            } else {
+                text.replace("joint = 0.0\n", "joint = 0.0\nmesh_size = 0.1\n")
+            };
+            crate::mesh::build(&crate::scene::parse_str(&text, None).unwrap())
+        };
+        let (rigid, deformable) = (scene(true), scene(false));
+        assert!(deformable.triangles.len() > 50);
+        for (mesh, other) in [(&rigid, &deformable), (&deformable, &rigid)] {
+            let n = mesh.n_dofs;
+            let presc =
+                |s: f64| -> Vec<Point> { mesh.blocks.iter().map(|_| [s, -0.5 * s]).collect() };
+            // the current configuration: moved once already
+            let (cur, _) = moved(mesh, &pattern(n, 1e-3), &presc(1e-4));
+            let (spare, _) = moved(&cur, &pattern(n, -2e-2), &presc(3e-3));
+            let (dq, pr) = (pattern(n, 5e-3), presc(-2e-4));
+            let (want, du) = moved(&cur, &dq, &pr);
+            let json = |m: &Mesh| serde_json::to_string(m).unwrap();
+            for spare in [spare, other.clone()] {
+                let (got, du2) = moved_reusing(&cur, &dq, &pr, Some(spare));
+                assert_eq!(json(&got), json(&want));
+                assert_eq!(format!("{du2:?}"), format!("{du:?}"));
+            }
+            assert_ne!(json(&want), json(&cur));
+        }
     }
 }

@@ -339,7 +339,17 @@ pub struct Driver<'a> {
     /// current arc-length increment (the contact-state corrector, docs/theory.md,
     /// "Contact-state corrector", Eq. F1; empty, or all `None`, elsewhere).
     frozen: Vec<Option<Frozen>>,
+    /// Configurations of trials no longer needed (at most [`SPARE_MESHES`]), whose memory
+    /// the next trials reuse ([`Driver::recycle`]; all of `cur`'s topology, which a static
+    /// run never changes).
+    spare: std::sync::Mutex<Vec<Mesh>>,
 }
+
+/// The most trial configurations [`Driver::recycle`] keeps: the line search evaluates
+/// one trial at a time and keeps the best, the iteration one, so that two spares serve
+/// nearly every trial; more would only hold memory (a mesh is 1.5 MB on the rigid P2 wall
+/// of docs/performance.md, 9,480 contacts, and grows with the contacts).
+const SPARE_MESHES: usize = 2;
 
 /// A contact held in one state of its law for the rest of an arc-length increment: a
 /// fixed linear law through its force at the iterate where it was frozen,
@@ -565,7 +575,23 @@ impl<'a> Driver<'a> {
             push_curve: Vec::new(),
             flips: Vec::new(),
             frozen: Vec::new(),
+            spare: std::sync::Mutex::new(Vec::new()),
         })
+    }
+
+    /// Give back a trial no longer needed: its configuration is kept (up to
+    /// [`SPARE_MESHES`]) for the next trial to be written into
+    /// ([`super::config::moved_reusing`]) instead of a copy of `cur`.
+    fn recycle(&self, t: Trial) {
+        self.keep_spare(t.mesh);
+    }
+
+    /// [`Driver::recycle`] for a configuration of `cur`'s topology.
+    fn keep_spare(&self, mesh: Mesh) {
+        let mut spare = self.spare.lock().unwrap_or_else(|e| e.into_inner());
+        if spare.len() < SPARE_MESHES {
+            spare.push(mesh);
+        }
     }
 
     /// Evaluate the increment `dq` (and the prescribed translations `presc`) from the
@@ -573,7 +599,8 @@ impl<'a> Driver<'a> {
     /// ([`Driver::frozen`]) take the force of their frozen law (Eq. F1), the difference
     /// from the true law's force mapped into the internal forces.
     fn trial(&self, dq: &[f64], presc: &[Point]) -> Trial {
-        let mut t = evaluate(
+        let spare = self.spare.lock().unwrap_or_else(|e| e.into_inner()).pop();
+        let mut t = super::config::evaluate_reusing(
             &self.system,
             &self.cur,
             &self.committed,
@@ -582,6 +609,7 @@ impl<'a> Driver<'a> {
             self.scene.model.thickness,
             dq,
             presc,
+            spare,
         );
         for (k, fr) in self.frozen.iter().enumerate() {
             let Some(fr) = fr else { continue };
@@ -1452,7 +1480,7 @@ impl<'a> Driver<'a> {
                 }
             }
             let (_, t, cand) = best;
-            trial = t;
+            self.recycle(std::mem::replace(&mut trial, t));
             dq = cand;
             let dmax = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             if !dmax.is_finite() || dmax > 0.5 * size {
@@ -1540,7 +1568,11 @@ impl<'a> Driver<'a> {
             let t = self.trial(&cand, presc);
             let rn2 = Self::norm(&self.out_of_balance(&load.at(alpha), &t.f_int));
             if best.as_ref().is_none_or(|b| rn2 < b.0) {
-                best = Some((rn2, t, cand, alpha));
+                if let Some(worse) = best.replace((rn2, t, cand, alpha)) {
+                    self.recycle(worse.1);
+                }
+            } else {
+                self.recycle(t);
             }
             if rn2 <= rn {
                 break;
@@ -1709,7 +1741,8 @@ impl<'a> Driver<'a> {
         self.committed.force = trial.force;
         self.committed.state = trial.state;
         self.committed.history = trial.history;
-        self.cur = trial.mesh;
+        let old = std::mem::replace(&mut self.cur, trial.mesh);
+        self.keep_spare(old);
         self.kbuf_local = None;
         self.aux_local = None;
         // a held secant factorization is now of an older geometry: across increments it

@@ -560,8 +560,24 @@ pub struct ContactMap {
     pub g: [[f64; 2]; 12],
 }
 
-/// Contact `c`'s free unknowns and gradients ([`ContactMap`]).
+/// Contact `c`'s free unknowns and gradients ([`ContactMap`]; METHOD.md §3, the rows of
+/// T that give δₙ, δₛ).
+///
+/// A node-to-node contact (no `along`, every contact of the static driver) takes a direct
+/// route ([`node_to_node_map`]), bit-identical to the general one through
+/// [`Mesh::contact_maps`] and [`contact_gradient`]: the static driver computes the map of
+/// every contact that carries a force at every trial of its iterations.
 pub fn contact_map(mesh: &Mesh, c: &Contact) -> ContactMap {
+    match c.along {
+        None => node_to_node_map(mesh, c),
+        Some(_) => combined_map(mesh, c),
+    }
+}
+
+/// [`contact_map`] by the general route: the points' maps ([`Mesh::contact_maps`], a
+/// vertex-to-edge contact's l point combining its edge's two ends) and their gradients
+/// along n and s ([`contact_gradient`]), without the constrained slots.
+fn combined_map(mesh: &Mesh, c: &Contact) -> ContactMap {
     let (ml, mm) = mesh.contact_maps(c);
     let n = c.normal;
     let gn = contact_gradient(&ml, &mm, n);
@@ -582,6 +598,37 @@ pub fn contact_map(mesh: &Mesh, c: &Contact) -> ContactMap {
     map
 }
 
+/// [`contact_map`] of a node-to-node contact: each point is one node, u = G q with G its
+/// [`crate::mesh::NodeMap`] (dimensionless, or m for a rigid block's rotation), and the
+/// gradients of δₙ = n·(u_m − u_l), δₛ = s·(u_m − u_l) are gₙ = ± n·G, gₛ = ± s·G (− on
+/// the l side). The same floating-point operations as the general route, whose one-node
+/// point map holds 0 + 1·G (the sum of its weighted parts: −0 becomes +0), without its
+/// arrays of combined points and gradients.
+fn node_to_node_map(mesh: &Mesh, c: &Contact) -> ContactMap {
+    let n = c.normal;
+    let s = [-n[1], n[0]];
+    let mut map = ContactMap {
+        len: 0,
+        dofs: [CONSTRAINED; 12],
+        g: [[0.0; 2]; 12],
+    };
+    for (node, side) in [(c.node_l, -1.0), (c.node_m, 1.0)] {
+        let nm = mesh.node_map(node);
+        for k in 0..3 {
+            if nm.dofs[k] == CONSTRAINED {
+                continue;
+            }
+            let (g0, g1) = (0.0 + nm.g[0][k], 0.0 + nm.g[1][k]);
+            let (gn, gs) = (n[0] * g0 + n[1] * g1, s[0] * g0 + s[1] * g1);
+            map.dofs[map.len] = nm.dofs[k];
+            // a sign flip is exact: −(a) as the general route's negation
+            map.g[map.len] = if side < 0.0 { [-gn, -gs] } else { [gn, gs] };
+            map.len += 1;
+        }
+    }
+    map
+}
+
 /// Add the local force [Fₙ, Fₛ] (N) of contact `c` to the global vector `out`:
 /// out += Fₙ gₙ + Fₛ gₛ (the contact's share of F_int, METHOD.md §3).
 pub fn add_contact_force(mesh: &Mesh, c: &Contact, f: [f64; 2], out: &mut [f64]) {
@@ -590,8 +637,48 @@ pub fn add_contact_force(mesh: &Mesh, c: &Contact, f: [f64; 2], out: &mut [f64])
 
 /// [`add_contact_force`] with the contact's map computed already.
 pub fn add_mapped_force(map: &ContactMap, f: [f64; 2], out: &mut [f64]) {
-    for (&d, g) in map.dofs.iter().zip(&map.g).take(map.len) {
-        out[d as usize] += f[0] * g[0] + f[1] * g[1];
+    let mut share = ContactShare::NONE;
+    share.set(map, f);
+    share.add_to(out);
+}
+
+/// A contact's share of F_int (N): Fₙ gₙ + Fₛ gₛ on each of its free unknowns
+/// ([`ContactMap`]), computed apart from its addition into the global vector (in
+/// parallel, then added in contact order: [`add_mapped_force`]'s sums to the bit).
+#[derive(Debug, Clone, Copy)]
+pub struct ContactShare {
+    len: usize,
+    dofs: [u32; 12],
+    values: [f64; 12],
+}
+
+impl ContactShare {
+    /// No share (a contact that carries no force).
+    pub const NONE: ContactShare = ContactShare {
+        len: 0,
+        dofs: [CONSTRAINED; 12],
+        values: [0.0; 12],
+    };
+
+    /// The share of the force `f` = [Fₙ, Fₛ] (N) of the contact of `map`, written in place.
+    pub fn set(&mut self, map: &ContactMap, f: [f64; 2]) {
+        self.len = map.len;
+        for (i, (&d, g)) in map.dofs.iter().zip(&map.g).take(map.len).enumerate() {
+            self.dofs[i] = d;
+            self.values[i] = f[0] * g[0] + f[1] * g[1];
+        }
+    }
+
+    /// No share any more.
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    /// out += the share.
+    pub fn add_to(&self, out: &mut [f64]) {
+        for (&d, v) in self.dofs.iter().zip(&self.values).take(self.len) {
+            out[d as usize] += v;
+        }
     }
 }
 
@@ -728,6 +815,66 @@ mod tests {
         sys.stiffness_full_into(&turned, &local, &mut full);
         assert!(same_bits(&kept.values, &full.values));
         assert!(!same_bits(&kept.values, &before.values));
+    }
+
+    /// The direct map of a node-to-node contact is the general route's ([`combined_map`],
+    /// an independent composition of the points' maps and gradients) to the bit, on
+    /// rigid bricks (3 slots a side), deformable ones (2) and the fixed base (none), in a
+    /// moved configuration (every node shifted and every normal turned, so that no
+    /// gradient is a round number), and with the signed zeros the general route makes
+    /// (a node level with its block's centroid: G's −(y − y_c) is −0, which its sum
+    /// 0 + 1·G turns into +0). A rotation's gradient is also checked against its closed
+    /// form: ∂δₙ/∂θ_l = −n·(−(y − y_c), x − x_c).
+    #[test]
+    fn node_to_node_maps_are_the_general_route() {
+        let rigid =
+            crate::scene::parse_str(&crate::scene::examples::scaled_wall(4, true), None).unwrap();
+        let rigid = crate::mesh::build(&rigid);
+        let (_, deformable) = meshed_wall();
+        let (sin, cos) = 0.07f64.sin_cos();
+        let mut checked_rotation = 0;
+        for (mesh, lens) in [(rigid, [3, 6]), (deformable, [2, 4])] {
+            let mut moved = mesh.clone();
+            for (i, p) in moved.nodes.iter_mut().enumerate() {
+                p[0] += 1e-3 * (i as f64 * 0.37).sin();
+                p[1] += 1e-3 * (i as f64 * 0.23).cos();
+            }
+            for c in &mut moved.contacts {
+                let n = c.normal;
+                c.normal = [cos * n[0] - sin * n[1], sin * n[0] + cos * n[1]];
+            }
+            // a node level with its rigid block's centroid, a normal with a −0 component
+            let c0 = moved.contacts[0].clone();
+            if let crate::mesh::BlockDofs::Rigid { centroid, .. } =
+                moved.blocks[c0.block_l as usize].dofs
+            {
+                moved.nodes[c0.node_l as usize][1] = centroid[1];
+            }
+            moved.contacts[1].normal = [-0.0, 1.0];
+            let mut seen = std::collections::BTreeSet::new();
+            for m in [&mesh, &moved] {
+                for c in &m.contacts {
+                    assert!(c.along.is_none());
+                    let (a, b) = (node_to_node_map(m, c), combined_map(m, c));
+                    assert_eq!(a.len, b.len);
+                    seen.insert(a.len);
+                    assert_eq!(a.dofs, b.dofs);
+                    let bits = |g: &[[f64; 2]; 12]| g.map(|x| x.map(f64::to_bits));
+                    assert_eq!(bits(&a.g), bits(&b.g));
+                    if let crate::mesh::BlockDofs::Rigid { centroid, .. } =
+                        m.blocks[c.block_l as usize].dofs
+                    {
+                        let (p, n) = (m.nodes[c.node_l as usize], c.normal);
+                        let want = -(n[0] * -(p[1] - centroid[1]) + n[1] * (p[0] - centroid[0]));
+                        assert!((a.g[2][0] - want).abs() <= 1e-15 * (1.0 + want.abs()));
+                        checked_rotation += 1;
+                    }
+                }
+            }
+            // two bricks, and a brick on the fixed base
+            assert!(seen.into_iter().eq(lens));
+        }
+        assert!(checked_rotation > 10);
     }
 
     #[test]

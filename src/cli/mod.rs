@@ -195,21 +195,32 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Start the global thread pool with `n` threads (default: rayon's, all cores), the
+/// calling (main) thread one of them: the analyses run on it and call parallel loops by
+/// the thousand (every trial of the static driver, every matrix product), which then start
+/// on it and hand only their split halves to the other threads. Without it every loop is
+/// handed from the main thread to a worker and back (a wake-up, a futex wait and a
+/// worker's idle spinning each time): on the rigid 40 × 40 wall of docs/performance.md,
+/// 3,852 futex calls and 16,588 yields of the idle worker in a run, and most of its
+/// system time.
 fn threads(n: Option<usize>) -> Result<()> {
-    if let Some(n) = n {
-        if n == 0 {
-            return Err(Error::new("--threads must be at least 1")
-                .place("option --threads")
-                .fix("give a positive number of threads"));
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .map_err(|e| {
-                Error::new(format!("cannot start {n} threads: {e}")).place("option --threads")
-            })?;
+    if n == Some(0) {
+        return Err(Error::new("--threads must be at least 1")
+            .place("option --threads")
+            .fix("give a positive number of threads"));
     }
-    Ok(())
+    let started = rayon::ThreadPoolBuilder::new()
+        .num_threads(n.unwrap_or(0))
+        .use_current_thread()
+        .build_global();
+    match (started, n) {
+        (Err(e), Some(n)) => {
+            Err(Error::new(format!("cannot start {n} threads: {e}")).place("option --threads"))
+        }
+        // without --threads, a pool started already (another command in this process)
+        // serves as it is
+        _ => Ok(()),
+    }
 }
 
 fn check_amplification(a: Option<f64>) -> Result<()> {

@@ -216,10 +216,12 @@ impl Softening {
                 Active::Both => {
                     let s1 = r * ft;
                     let t = (r * c - s1 * tp).max(0.0);
-                    let l2 = (tau - t) / ks;
-                    // the opening past the strength less the slip's dilatancy
-                    let dil = self.dilatancy.map_or(0.0, |d| d.tan_at(s1) * l2.max(0.0));
-                    (s1, t, (sig - s1) / kn - dil, l2)
+                    // on the tension cut-off the joint's faces part: it opens by the whole
+                    // opening past the strength and does not dilate (Eq. D1 rides the faces
+                    // on each other, which needs them in contact); at the edge of this
+                    // return, σ* − kₙ tan ψ Δλ₂ = s′fₜ, the shear return gives the same
+                    // stresses
+                    (s1, t, (sig - s1) / kn, (tau - t) / ks)
                 }
             }
         };
@@ -370,8 +372,14 @@ impl Softening {
                         return done(out, ContactState::Stick);
                     }
                 }
+            }
+            // a dilating joint reaches the corner in compression from a trial that is not
+            // (its slip presses it): the corner, if it ends compressed
+            if sig < 0.0 || self.dilatancy.is_some() {
                 if let Some(out) = self.ret_corner(cap, sig, ta, s, kappa) {
-                    return done(out, ContactState::Slip);
+                    if sig < 0.0 || out.sig <= 0.0 {
+                        return done(out, ContactState::Slip);
+                    }
                 }
             }
         }
@@ -837,5 +845,94 @@ mod tests {
                 assert_eq!(f[0], s0);
             }
         }
+    }
+
+    /// The dilatant return over a grid of trial stresses (σ* from −14 to +1 MPa, |τ*| to
+    /// 8 MPa, fresh and 60 % spent joints), without and with the cap (σᵤ = 20 MPa so that
+    /// the joint still dilates at the cap's corner): every result lies inside the
+    /// surfaces (to 10⁻⁹ of the stress scale), and the plastic relative displacement
+    /// (σ* − σ)/kₙ, (|τ*| − |τ|)/kₛ splits into the flows of the active surfaces with
+    /// multipliers ≥ 0 (Eq. D1): a slipping joint's plastic opening is tan ψ(σ) times its
+    /// plastic slip, plus 2σΔλ₃ on the cap's corner, whose slip is Δλ₂ + 2C_ss|τ|Δλ₃;
+    /// an open one lies on the tension cut-off and opens (without dilating).
+    #[test]
+    fn dilatant_returns_stay_on_the_surfaces_with_nonnegative_flows() {
+        let (kn, ks) = (82e9, 36e9);
+        let mut checked = [0usize; 3];
+        for (m, su) in [
+            (eindhoven(), 2e6),
+            (with_cap(Some((5000.0, 0.093e-3))), 20e6),
+        ] {
+            let d = Dilatancy {
+                tan_psi: 0.5,
+                stress: su,
+            };
+            let m = Softening {
+                dilatancy: Some(d),
+                ..m
+            };
+            let scale = 10.5e6;
+            for xi in [0.0, 0.6] {
+                for i in 0..=60 {
+                    for j in 0..=40 {
+                        let sig = -14e6 + 15e6 * i as f64 / 60.0;
+                        let tau = 8e6 * j as f64 / 40.0;
+                        let (g, st, h) = m.stress_update(sig, tau, [xi, 0.0]);
+                        let (sg, ta) = (g[0], g[1].abs());
+                        let r = 1.0 - h[0];
+                        let tol = 1e-9 * scale;
+                        assert!(sg - r * m.tensile_strength <= tol, "f1 at {sig} {tau}");
+                        assert!(
+                            ta + sg * m.tan_phi - r * m.cohesion <= tol,
+                            "f2 at {sig} {tau}: σ {sg} τ {ta}"
+                        );
+                        if let Some(cap) = m.cap {
+                            assert!(
+                                cap.radius(sg, ta) - cap.yield_value(h[1]) <= tol,
+                                "f3 at {sig} {tau}"
+                            );
+                        }
+                        let (un, us) = ((sig - sg) / kn, (tau - ta) / ks);
+                        let tp = d.tan_at(sg);
+                        let flow_tol = 1e-7 * (un.abs() + us.abs()) + 1e-18;
+                        match st {
+                            ContactState::Stick if h[1] == 0.0 => {
+                                assert!(un.abs() <= flow_tol && us.abs() <= flow_tol);
+                                checked[0] += 1;
+                            }
+                            ContactState::Slip if h[1] == 0.0 => {
+                                // the shear surface alone
+                                assert!(us >= -flow_tol, "slip back at {sig} {tau}");
+                                assert!(
+                                    (un - tp * us).abs() <= flow_tol,
+                                    "{sig} {tau}: opening {un} against tan ψ × slip {}",
+                                    tp * us
+                                );
+                                checked[1] += 1;
+                            }
+                            ContactState::Slip => {
+                                // the cap's corner: un = tp l2 + 2σ l3, us = l2 + 2 C_ss |τ| l3
+                                let css = m.cap.unwrap().shear_factor;
+                                let (a, b, c, e) = (tp, 2.0 * sg, 1.0, 2.0 * css * ta);
+                                let det = a * e - b * c;
+                                let l2 = (un * e - b * us) / det;
+                                let l3 = (a * us - c * un) / det;
+                                let lt = 1e-6 * (l2.abs() + l3.abs() * scale);
+                                assert!(l2 >= -lt && l3 >= -lt, "{sig} {tau}: Δλ₂ {l2}, Δλ₃ {l3}");
+                                checked[2] += 1;
+                            }
+                            ContactState::Open => {
+                                // on the cut-off: opening, no dilatancy
+                                assert!(un >= -flow_tol, "{sig} {tau}: {un} {us}");
+                                assert!((sg - r * m.tensile_strength).abs() <= tol);
+                            }
+                            _ => {}
+                        }
+                    }
+                }
+            }
+        }
+        // every kind of return was met on the grid
+        assert!(checked.iter().all(|&n| n > 20), "{checked:?}");
     }
 }

@@ -294,7 +294,8 @@ pub struct Driver<'a> {
     /// A second persistent matrix buffer, on `cur` as `kbuf`: the matrix that the held
     /// secant factorization corrected for a low-rank change solves with
     /// ([`Driver::near_into_aux`]), while `kbuf` holds the iteration matrix; with what
-    /// `aux_local` says it holds, as `kbuf_local`.
+    /// `aux_local` says it holds, as `kbuf_local`. Its values are allocated at its first
+    /// use.
     aux: CsrMatrix,
     aux_local: Option<Vec<LocalStiffness>>,
     /// Whether the secant matrix that the main backend holds factorized (`Held::Secant`;
@@ -541,7 +542,13 @@ impl<'a> Driver<'a> {
         let t = scene.model.thickness;
         let area = mesh.contacts.iter().map(|c| c.length * t).collect();
         let kbuf = CsrMatrix::zeros(system.plan.pattern().clone());
-        let aux = kbuf.clone();
+        // no values until the first correction across a change of state needs them
+        // (`near_into_aux`): most runs never do, and on the 10⁶-unknown wall they are
+        // as large as the matrix's
+        let aux = CsrMatrix {
+            pattern: kbuf.pattern.clone(),
+            values: Vec::new(),
+        };
         Ok(Driver {
             scene,
             settings,
@@ -930,6 +937,9 @@ impl<'a> Driver<'a> {
         };
         if self.backend.factorized_values().is_none() {
             return false;
+        }
+        if self.aux.values.is_empty() {
+            self.aux.values = vec![0.0; self.kbuf.values.len()];
         }
         if !self.held_current && self.held_on_cur.is_empty() {
             let local = self.secant_local(&held_states.clone());

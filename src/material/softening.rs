@@ -12,8 +12,9 @@
 //! * shear surface f₂ = |τ| + σ tan φ − s c: plastic slip Δλ₂, and with a dilatancy
 //!   ([`Dilatancy`], docs/theory.md Eq. D1) the plastic opening Δλ₂ tan ψ(σ) with
 //!   tan ψ(σ) = tan ψ₀ ⟨1 + σ/σᵤ⟩ (σ ≤ 0; tan ψ₀ in tension): the joint dilates as it
-//!   slips, less under compression, not at all beyond σᵤ (Lourenço and Rots 1997;
-//!   Van Zijl 2004). Without it the flow is along τ alone (no dilatancy);
+//!   slips, less under compression, not at all beyond σᵤ (after Lourenço 1996 and Van
+//!   Zijl 2004, as recalled, unchecked). Without it the flow is along τ alone (no
+//!   dilatancy);
 //! * softening: dξ = (s fₜ dλ₁)/G_f^I + (s c dλ₂)/G_f^II, the work spent against the
 //!   tensile strength and against the cohesion, each over its own fracture energy (the
 //!   linear mixed-mode energy criterion). Within an increment s′ = s exp(−fₜ Δλ₁/G_f^I −

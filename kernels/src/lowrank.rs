@@ -214,8 +214,8 @@ impl Tree {
     }
 
     /// y ← L⁻¹ y, or L⁻ᵀ y if `transpose` (y permuted, length n): on the [`Split`]'s
-    /// parts in parallel when there is one, else with faer's sequential kernels; the same
-    /// bits either way.
+    /// parts in parallel when there is one and rayon has more than one thread, else with
+    /// faer's sequential kernels; the same bits either way.
     fn substitute(
         &mut self,
         an: &crate::faer_backend::CholAnalysis,
@@ -223,15 +223,15 @@ impl Tree {
         transpose: bool,
     ) {
         match self.split.take() {
-            Some(mut split) => {
-                if transpose {
-                    split.backward(self, &an.l_values, y);
-                } else {
-                    split.forward(self, &an.l_values, y);
-                }
+            // on one thread the parts' copies would only cost (a few % of a substitution)
+            Some(mut split) if rayon::current_num_threads() > 1 => {
+                split.substitute(self, &an.l_values, y, transpose);
                 self.split = Some(split);
             }
-            None => substitute(an, y, transpose, &mut self.mem),
+            split => {
+                self.split = split;
+                substitute(an, y, transpose, &mut self.mem)
+            }
         }
     }
 }
@@ -425,6 +425,15 @@ impl Split {
             part_of,
             scratch,
         })
+    }
+
+    /// y ← L⁻¹ y, or L⁻ᵀ y if `transpose`.
+    fn substitute(&mut self, t: &Tree, l: &[f64], y: &mut [f64], transpose: bool) {
+        if transpose {
+            self.backward(t, l, y);
+        } else {
+            self.forward(t, l, y);
+        }
     }
 
     /// Each part's copy of its columns of y.
@@ -1449,8 +1458,9 @@ mod tests {
 
     /// The substitutions on the [`Split`]'s parts give faer's sequential ones bit for bit
     /// (the same operations on every entry, in the same order: see [`Split`]) in rayon
-    /// pools of 1, 2 and 8 threads, forward and backward, on the supernodal factor of an
-    /// 80 × 60 grid (METIS and AMD orderings), whose tree has at least two parts.
+    /// pools of 1, 2 and 8 threads (the split called directly: `Tree::substitute` takes
+    /// faer's kernels on one thread), forward and backward, on the supernodal factor of
+    /// an 80 × 60 grid (METIS and AMD orderings), whose tree has at least two parts.
     #[test]
     fn split_substitution_is_faers_bit_for_bit() {
         let (n, springs) = grid(80, 60);
@@ -1475,7 +1485,9 @@ mod tests {
                         .build()
                         .unwrap();
                     let mut y = f.clone();
-                    pool.install(|| tree.substitute(an, &mut y, transpose));
+                    let mut split = tree.split.take().expect("split");
+                    pool.install(|| split.substitute(&tree, &an.l_values, &mut y, transpose));
+                    tree.split = Some(split);
                     assert!(
                         crate::backend::same_bits(&y, &want),
                         "{name}, transpose {transpose}, {threads} threads"
@@ -1524,10 +1536,12 @@ mod tests {
             for (i, pool) in pools.iter().enumerate() {
                 let t = Instant::now();
                 let mut y = f.clone();
+                let mut split = tree.split.take().expect("split");
                 pool.install(|| {
-                    tree.substitute(an, &mut y, false);
-                    tree.substitute(an, &mut y, true);
+                    split.substitute(&tree, &an.l_values, &mut y, false);
+                    split.substitute(&tree, &an.l_values, &mut y, true);
                 });
+                tree.split = Some(split);
                 times[i + 1].push(t.elapsed().as_secs_f64());
                 assert!(crate::backend::same_bits(&y, &want));
             }

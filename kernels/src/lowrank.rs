@@ -777,6 +777,42 @@ impl LowRankCorrection {
         Ok(())
     }
 
+    /// rhs ← K_old⁻¹ rhs with the held factor alone, its substitutions on the tree's
+    /// [`Split`] (bit-identical to faer's solve; [`FaerCholesky`]'s `LinearBackend::solve`
+    /// with more than one rayon thread). `false` when that does not apply (nothing
+    /// factorized, a simplicial factor, a tree without parts, one thread, a right-hand
+    /// side of another length): the caller takes faer's solve, which also reports the
+    /// errors.
+    pub(crate) fn solve_held(
+        &mut self,
+        factor: &FaerCholesky,
+        rhs: &mut [f64],
+    ) -> Result<bool, SolveError> {
+        let Ok(an) = held(factor) else {
+            return Ok(false);
+        };
+        if rayon::current_num_threads() <= 1
+            || rhs.len() != an.pattern.n()
+            || !matches!(an.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+        {
+            return Ok(false);
+        }
+        if self.tree.as_ref().map(|t| t.pattern_id) != Some(an.pattern.id()) {
+            self.tree = Some(Tree::new(factor)?);
+        }
+        let tree = self.tree.as_mut().expect("tree");
+        if tree.split.is_none() {
+            return Ok(false);
+        }
+        let mut y: Vec<f64> = tree.fwd.iter().map(|&i| rhs[i]).collect();
+        tree.substitute(an, &mut y, false);
+        tree.substitute(an, &mut y, true);
+        for (p, &i) in tree.fwd.iter().enumerate() {
+            rhs[i] = y[p];
+        }
+        Ok(true)
+    }
+
     /// rhs ← K_new⁻¹ rhs: [`update`](Self::update) for `k_new` unless the last successful
     /// one was made for the same values and the same held factorization (several solves
     /// with one K_new), then [`solve`](Self::solve). The work of
@@ -1494,6 +1530,53 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// [`FaerCholesky`]'s solve on 2 and 8 threads (the split's substitutions) gives its
+    /// solve on one thread (faer's `solve_in_place_with_conj`, permutation included) bit
+    /// for bit, on the 80 × 60 grid with both orderings.
+    #[test]
+    fn held_solve_on_threads_is_faers_bit_for_bit() {
+        let (n, springs) = grid(80, 60);
+        let k = stiffness(n, &springs, &springs);
+        for ordering in [
+            crate::ordering::FillOrdering::Amd,
+            crate::ordering::FillOrdering::Metis,
+        ] {
+            let mut backend = FaerCholesky::new()
+                .with_supernodal_threshold(0.0)
+                .with_ordering(ordering);
+            backend.factorize(&k).unwrap();
+            let f = load(n);
+            let pool = |t| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .unwrap()
+            };
+            let mut want = f.clone();
+            pool(1).install(|| backend.solve(&mut want)).unwrap();
+            let mut c = LowRankCorrection::new();
+            let mut y = f.clone();
+            assert!(!pool(1).install(|| c.solve_held(&backend, &mut y)).unwrap());
+            for threads in [2, 8] {
+                let mut y = f.clone();
+                assert!(pool(threads)
+                    .install(|| c.solve_held(&backend, &mut y))
+                    .unwrap());
+                assert!(
+                    crate::backend::same_bits(&y, &want),
+                    "{ordering:?}, {threads}"
+                );
+                let mut y = f.clone();
+                pool(threads).install(|| backend.solve(&mut y)).unwrap();
+                assert!(
+                    crate::backend::same_bits(&y, &want),
+                    "{ordering:?}, {threads}"
+                );
+            }
+            assert_eq!(backend.stats().solves, 3);
         }
     }
 

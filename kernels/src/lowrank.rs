@@ -179,7 +179,7 @@ impl Tree {
         let mem = MemBuffer::try_new(req)
             .map_err(|_| SolveError::Other("out of memory for faer scratch".into()))?;
         let split = matches!(an.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
-            .then(|| Split::new(&begin, &row_ptr, &rows, &parent))
+            .then(|| Split::new(&begin, &row_ptr, &rows, &parent, &node_of))
             .flatten();
         Ok(Self {
             pattern_id: an.pattern.id(),
@@ -297,13 +297,22 @@ struct PartScratch {
 /// least: on the 40 × 40 wall P2 (rigid, 531 supernodes) 0.54 of the sequential flops,
 /// three parts; the same for the deformable one (3457 supernodes, four parts).
 const SPLIT_PARTS: f64 = 32.0;
+/// A factor whose substitution costs fewer flops (a few tens of microseconds) is not
+/// split: rayon's tasks would cost about as much.
+const SPLIT_MIN_WORK: f64 = 2e5;
 /// Subtrees lighter than `1 / SPLIT_SMALL` of the work stay in the sequential rest.
 const SPLIT_SMALL: f64 = 64.0;
 
 impl Split {
-    /// The partition of the supernodal tree given by `begin`, `row_ptr`, `rows` and
-    /// `parent` (as in [`Tree`]), or None when it has fewer than two parts.
-    fn new(begin: &[usize], row_ptr: &[usize], rows: &[u32], parent: &[usize]) -> Option<Self> {
+    /// The partition of the supernodal tree given by `begin`, `row_ptr`, `rows`, `parent`
+    /// and `node_of` (as in [`Tree`]), or None when it has fewer than two parts.
+    fn new(
+        begin: &[usize],
+        row_ptr: &[usize],
+        rows: &[u32],
+        parent: &[usize],
+        node_of: &[u32],
+    ) -> Option<Self> {
         let nodes = parent.len();
         let mut work = vec![0.0f64; nodes];
         let mut children: Vec<Vec<usize>> = vec![Vec::new(); nodes];
@@ -327,6 +336,9 @@ impl Split {
             }
         }
         let total: f64 = roots.iter().map(|&r| work[r]).sum();
+        if total < SPLIT_MIN_WORK {
+            return None;
+        }
         // the work on two threads: the rest, then the parts (those not too small) each
         // given, heaviest first, to the less loaded thread
         let on_two = |cand: &[usize]| {
@@ -392,10 +404,7 @@ impl Split {
             for &s in &members {
                 for &r in &rows[row_ptr[s]..row_ptr[s + 1]] {
                     // the row's supernode and its place in the copy
-                    let a = match begin.binary_search(&(r as usize)) {
-                        Ok(a) => a,
-                        Err(a) => a - 1,
-                    };
+                    let a = node_of[r as usize] as usize;
                     match part_of[a] {
                         (p, i) if p == pi => {
                             map.push((local[i] + r as usize - begin[a]) as u32);

@@ -1590,7 +1590,8 @@ mod tests {
     }
 
     /// Timing of one solve's two substitutions (L⁻¹ then L⁻ᵀ) on the supernodal factor of
-    /// a 50 × 49 grid (4900 unknowns, about the size of the 40 × 40 wall P2): faer's
+    /// a 120 × 100 grid (24,000 unknowns, x and y uncoupled: two 12,000-unknown problems;
+    /// factor about the size of the deformable 40 × 40 wall P2's): faer's
     /// sequential kernels against the [`Split`] in pools of 1 and 2 threads, 400 rounds
     /// taken in turn, minimum and median printed (docs/performance.md, P2 section). Not a
     /// check of speed (that depends on the machine's load); the bits are checked.
@@ -1598,12 +1599,17 @@ mod tests {
     #[test]
     #[ignore]
     fn split_substitution_timing() {
-        let (n, springs) = grid(50, 49);
+        let (n, springs) = grid(120, 100);
         let k = stiffness(n, &springs, &springs);
         let mut backend = FaerCholesky::new().with_supernodal_threshold(0.0);
         backend.factorize(&k).unwrap();
         let an = held(&backend).unwrap();
         let mut tree = Tree::new(&backend).unwrap();
+        println!(
+            "factor nnz {}, {} parts",
+            an.l_values.len(),
+            tree.split.as_ref().map_or(0, |s| s.parts.len())
+        );
         let f = load(n);
         let pools: Vec<rayon::ThreadPool> = [1, 2]
             .iter()

@@ -168,10 +168,26 @@ pub trait LinearBackend: Send {
     }
 }
 
-/// Whether two value arrays are bit-identical (the skip test of `factorize`).
+/// Whether two value arrays are bit-identical (the skip test of `factorize`, and of
+/// `solve_changed`'s reuse of its last correction). Long arrays are compared in chunks of
+/// [`SAME_BITS_CHUNK`] on rayon's threads (a yes or no: the same answer on any number).
 pub fn same_bits(a: &[f64], b: &[f64]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+    let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits());
+    a.len() == b.len()
+        && if a.len() <= SAME_BITS_CHUNK {
+            same(a, b)
+        } else {
+            use rayon::prelude::*;
+            a.par_chunks(SAME_BITS_CHUNK)
+                .zip(b.par_chunks(SAME_BITS_CHUNK))
+                .all(|(x, y)| same(x, y))
+        }
 }
+
+/// Entries per task of [`same_bits`] (and of the low-rank correction's scan of a changed
+/// matrix): 16 384 × 8 bytes, a few microseconds of reading, well above rayon's cost of a
+/// task.
+pub const SAME_BITS_CHUNK: usize = 1 << 14;
 
 /// maxᵢ |xᵢ − yᵢ| / maxᵢ |yᵢ|: how far a solution `x` is from a reference `y`, relative
 /// to the reference's largest entry (NaN when `y` is all zeros).

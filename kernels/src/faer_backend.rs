@@ -544,6 +544,25 @@ impl FaerCholesky {
         &self.0
     }
 
+    /// `LinearBackend::solve`: with more than one rayon thread, the substitutions on
+    /// independent subtrees of the supernodal elimination tree in parallel
+    /// ([`LowRankCorrection`]'s split, bit-identical to faer's sequential solve); else,
+    /// and for a simplicial factor, faer's solve.
+    fn solve_held(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
+        if self.0.threads <= 1 && rayon::current_num_threads() > 1 {
+            let t = Instant::now();
+            let mut correction = std::mem::take(&mut self.1);
+            let done = correction.solve_held(self, rhs);
+            self.1 = correction;
+            if done? {
+                self.0.stats.solves += 1;
+                self.0.stats.solve_seconds += t.elapsed().as_secs_f64();
+                return Ok(());
+            }
+        }
+        self.0.solve(rhs)
+    }
+
     /// Sets faer's supernodal threshold (takes effect at the next analysis): 1 = automatic
     /// (default), 0 = always supernodal, `f64::INFINITY` = always simplicial.
     pub fn with_supernodal_threshold(mut self, threshold: f64) -> Self {
@@ -602,6 +621,11 @@ impl Default for FaerLdlt {
 }
 
 impl FaerLdlt {
+    /// `LinearBackend::solve`: faer's.
+    fn solve_held(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
+        self.0.solve(rhs)
+    }
+
     /// A backend with no analysis yet.
     pub fn new() -> Self {
         Self(CholeskyCore::new(Kind::Ldlt))
@@ -674,7 +698,7 @@ macro_rules! chol_backend {
                 self.0.factorize(a)
             }
             fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
-                self.0.solve(rhs)
+                self.solve_held(rhs)
             }
             fn stats(&self) -> &SolverStats {
                 &self.0.stats

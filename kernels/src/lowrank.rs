@@ -47,21 +47,30 @@
 //! Symbolic/numeric separation as elsewhere in the kernels: the elimination tree of the
 //! supernodes (or columns, for a simplicial factor) is built once per analysis of the held
 //! backend; [`LowRankCorrection::update`] does the numeric work for one K_new and
-//! [`LowRankCorrection::solve`] applies it to any number of right-hand sides. Everything
-//! runs sequentially: the results do not depend on the number of threads.
+//! [`LowRankCorrection::solve`] applies it to any number of right-hand sides.
+//!
+//! *Threads.* The results do not depend on the number of threads: the two substitutions
+//! of a solve run on independent subtrees of the supernodal elimination tree in parallel
+//! ([`Split`]), every entry receiving the same operations in the same order as in faer's
+//! sequential substitution, and the scan of ΔK runs in chunks of rows whose changes are
+//! read in order; the rest (W, C and its eigendecomposition) is sequential.
 
 use crate::backend::{LinearBackend, SolveError};
 use crate::csr::CsrMatrix;
 use crate::faer_backend::FaerCholesky;
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::matmul::matmul;
-use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::linalg::matmul::{matmul, matmul_with_conj};
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_lower_triangular_in_place_with_conj,
+    solve_upper_triangular_in_place_with_conj,
+};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
 use faer::sparse::linalg::triangular_solve as sparse_tri;
 use faer::sparse::SparseColMatRef;
 use faer::{Accum, Conj, Mat, MatMut, MatRef, Par};
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// Eigenvalues of a block of ΔK below this fraction of its largest are dropped.
@@ -99,6 +108,9 @@ struct Tree {
     inv: Vec<usize>,
     /// faer's scratch for one right-hand side.
     mem: MemBuffer,
+    /// The partition of a supernodal tree for substitutions on several threads (None:
+    /// simplicial, or no subtree worth a task).
+    split: Option<Split>,
 }
 
 impl Tree {
@@ -145,7 +157,7 @@ impl Tree {
         for s in 0..nodes {
             node_of[begin[s]..begin[s + 1]].fill(s as u32);
         }
-        let parent = (0..nodes)
+        let parent: Vec<usize> = (0..nodes)
             .map(|s| {
                 rows[row_ptr[s]..row_ptr[s + 1]]
                     .iter()
@@ -166,6 +178,9 @@ impl Tree {
         let req = an.symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
         let mem = MemBuffer::try_new(req)
             .map_err(|_| SolveError::Other("out of memory for faer scratch".into()))?;
+        let split = matches!(an.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+            .then(|| Split::new(&begin, &row_ptr, &rows, &parent, &node_of))
+            .flatten();
         Ok(Self {
             pattern_id: an.pattern.id(),
             begin,
@@ -177,6 +192,7 @@ impl Tree {
             fwd,
             inv,
             mem,
+            split,
         })
     }
 
@@ -187,6 +203,386 @@ impl Tree {
     fn pattern(&self, s: usize) -> &[u32] {
         &self.rows[self.row_ptr[s]..self.row_ptr[s + 1]]
     }
+
+    /// Supernode s of the factor `l`: its (c + p) × c block, column-major.
+    fn node_l<'a>(&self, l: &'a [f64], s: usize) -> MatRef<'a, f64> {
+        MatRef::from_column_major_slice(
+            &l[self.val_ptr[s]..self.val_ptr[s + 1]],
+            self.width(s) + self.pattern(s).len(),
+            self.width(s),
+        )
+    }
+
+    /// y ← L⁻¹ y, or L⁻ᵀ y if `transpose` (y permuted, length n): on the [`Split`]'s
+    /// parts in parallel when there is one and rayon has more than one thread, else with
+    /// faer's sequential kernels; the same bits either way.
+    fn substitute(
+        &mut self,
+        an: &crate::faer_backend::CholAnalysis,
+        y: &mut [f64],
+        transpose: bool,
+    ) {
+        match self.split.take() {
+            // on one thread the parts' copies would only cost (a few % of a substitution)
+            Some(mut split) if rayon::current_num_threads() > 1 => {
+                split.substitute(self, &an.l_values, y, transpose);
+                self.split = Some(split);
+            }
+            split => {
+                self.split = split;
+                substitute(an, y, transpose, &mut self.mem)
+            }
+        }
+    }
+}
+
+/// The partition of a supernodal elimination tree for the substitutions with L on several
+/// threads: disjoint subtrees ("parts"), each done on its own rayon task on a copy of its
+/// columns of y, and the rest (the parts' ancestors — the top separators — and the
+/// subtrees too small for a task), done sequentially.
+///
+/// In L⁻¹ y the parts run first; a part's products for rows above it (in the rest) are
+/// kept and subtracted when the sequential pass over the supernodes reaches the one that
+/// made them. In L⁻ᵀ y the rest runs first (it reads only its ancestors), then the parts,
+/// each reading the rows above it from a copy. Every entry of y thus receives the same
+/// floating-point operations in the same order as in faer's sequential substitution
+/// (`l_solve_with_conj`, `l_transpose_solve_with_conj`, whose per-supernode steps
+/// [`node_forward`] and [`node_backward`] repeat with the same kernels): the result is
+/// bit-identical to it whatever the number of threads, and the partition depends on the
+/// tree only.
+struct Split {
+    parts: Vec<Part>,
+    /// Part of each supernode (`NONE` for the rest) and its index among the part's.
+    part_of: Vec<(usize, usize)>,
+    /// One scratch per part.
+    scratch: Vec<PartScratch>,
+}
+
+/// A subtree of [`Split`].
+struct Part {
+    /// Its supernodes, ascending, and the offset of each one's columns in the part's
+    /// copy of y (one past the last at the end).
+    nodes: Vec<usize>,
+    local: Vec<usize>,
+    /// The columns of the part (permuted numbering), in the order of the copy.
+    cols: Vec<u32>,
+    /// For each entry of its supernodes' patterns, one supernode after the other: the row's
+    /// position in the copy, or `OUTSIDE` for a row of the rest; `pat_ptr[i]` the first
+    /// entry of supernode `nodes[i]`.
+    map: Vec<u32>,
+    pat_ptr: Vec<usize>,
+    /// The pattern rows outside the part, in the same order; those of supernode `nodes[i]`
+    /// are `outside[out_ptr[i]..out_ptr[i + 1]]`.
+    outside: Vec<u32>,
+    out_ptr: Vec<usize>,
+}
+
+const OUTSIDE: u32 = u32::MAX;
+
+#[derive(Default)]
+struct PartScratch {
+    /// The part's columns of y.
+    x: Vec<f64>,
+    /// Values for the rows of `outside`: the products to subtract (L⁻¹), or y's final
+    /// values there (L⁻ᵀ).
+    out: Vec<f64>,
+    /// One supernode's product with its rows below the diagonal block.
+    tmp: Vec<f64>,
+}
+
+/// The partition is searched by splitting the heaviest subtree into its children (its
+/// root going to the sequential rest) while it weighs more than `1 / SPLIT_PARTS` of the
+/// substitution's flops, keeping the candidate partition whose estimated time on two
+/// threads (the rest, plus the parts given heaviest first to the less loaded thread) is
+/// least: on the 40 × 40 wall P2 (rigid, 531 supernodes) 0.54 of the sequential flops,
+/// three parts; the same for the deformable one (3457 supernodes, four parts).
+const SPLIT_PARTS: f64 = 32.0;
+/// A factor whose substitution costs fewer flops (a few tens of microseconds) is not
+/// split: rayon's tasks would cost about as much.
+const SPLIT_MIN_WORK: f64 = 2e5;
+/// Subtrees lighter than `1 / SPLIT_SMALL` of the work stay in the sequential rest.
+const SPLIT_SMALL: f64 = 64.0;
+
+impl Split {
+    /// The partition of the supernodal tree given by `begin`, `row_ptr`, `rows`, `parent`
+    /// and `node_of` (as in [`Tree`]), or None when it has fewer than two parts.
+    fn new(
+        begin: &[usize],
+        row_ptr: &[usize],
+        rows: &[u32],
+        parent: &[usize],
+        node_of: &[u32],
+    ) -> Option<Self> {
+        let nodes = parent.len();
+        let mut work = vec![0.0f64; nodes];
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); nodes];
+        let mut roots = Vec::new();
+        for s in 0..nodes {
+            let (c, p) = (
+                (begin[s + 1] - begin[s]) as f64,
+                (row_ptr[s + 1] - row_ptr[s]) as f64,
+            );
+            // flops of the supernode's step: its triangle and its rows below
+            work[s] += c * (c + 2.0 * p);
+            match parent[s] {
+                NONE => roots.push(s),
+                // a parent after its children (faer's supernodes are so numbered; the
+                // passes below rely on it)
+                q if q > s && q < nodes => {
+                    work[q] += work[s];
+                    children[q].push(s);
+                }
+                _ => return None,
+            }
+        }
+        let total: f64 = roots.iter().map(|&r| work[r]).sum();
+        if total < SPLIT_MIN_WORK {
+            return None;
+        }
+        // the work on two threads: the rest, then the parts (those not too small) each
+        // given, heaviest first, to the less loaded thread
+        let on_two = |cand: &[usize]| {
+            let mut w: Vec<f64> = cand
+                .iter()
+                .map(|&s| work[s])
+                .filter(|&w| w >= total / SPLIT_SMALL)
+                .collect();
+            w.sort_by(|a, b| b.total_cmp(a));
+            let mut t = [0.0f64; 2];
+            for x in &w {
+                t[usize::from(t[1] < t[0])] += x;
+            }
+            total - w.iter().sum::<f64>() + t[0].max(t[1])
+        };
+        // split the heaviest subtree into its children while it weighs more than
+        // 1 / SPLIT_PARTS of the work, keeping the candidates that do best on two threads
+        let mut cand = roots;
+        let mut best = (on_two(&cand), cand.clone());
+        while let Some((i, &h)) = cand
+            .iter()
+            .enumerate()
+            .filter(|&(_, &s)| !children[s].is_empty())
+            .max_by(|a, b| work[*a.1].total_cmp(&work[*b.1]).then(b.1.cmp(a.1)))
+        {
+            if work[h] <= total / SPLIT_PARTS {
+                break;
+            }
+            cand.swap_remove(i);
+            cand.extend_from_slice(&children[h]);
+            let t = on_two(&cand);
+            if t < best.0 {
+                best = (t, cand.clone());
+            }
+        }
+        let mut cand = best.1;
+        cand.retain(|&s| work[s] >= total / SPLIT_SMALL);
+        if cand.len() < 2 {
+            return None;
+        }
+        cand.sort_unstable();
+        let mut part_of = vec![(NONE, 0); nodes];
+        let mut parts = Vec::with_capacity(cand.len());
+        for (pi, &root) in cand.iter().enumerate() {
+            let mut members = vec![root];
+            let mut i = 0;
+            while i < members.len() {
+                members.extend_from_slice(&children[members[i]]);
+                i += 1;
+            }
+            members.sort_unstable();
+            let mut local = vec![0];
+            let mut cols = Vec::new();
+            for (i, &s) in members.iter().enumerate() {
+                part_of[s] = (pi, i);
+                cols.extend(begin[s] as u32..begin[s + 1] as u32);
+                local.push(cols.len());
+            }
+            let mut map = Vec::new();
+            let mut pat_ptr = vec![0];
+            let mut outside = Vec::new();
+            let mut out_ptr = vec![0];
+            for &s in &members {
+                for &r in &rows[row_ptr[s]..row_ptr[s + 1]] {
+                    // the row's supernode and its place in the copy
+                    let a = node_of[r as usize] as usize;
+                    match part_of[a] {
+                        (p, i) if p == pi => {
+                            map.push((local[i] + r as usize - begin[a]) as u32);
+                        }
+                        _ => {
+                            map.push(OUTSIDE);
+                            outside.push(r);
+                        }
+                    }
+                }
+                pat_ptr.push(map.len());
+                out_ptr.push(outside.len());
+            }
+            parts.push(Part {
+                nodes: members,
+                local,
+                cols,
+                map,
+                pat_ptr,
+                outside,
+                out_ptr,
+            });
+        }
+        let scratch = parts.iter().map(|_| PartScratch::default()).collect();
+        Some(Self {
+            parts,
+            part_of,
+            scratch,
+        })
+    }
+
+    /// y ← L⁻¹ y, or L⁻ᵀ y if `transpose`.
+    fn substitute(&mut self, t: &Tree, l: &[f64], y: &mut [f64], transpose: bool) {
+        if transpose {
+            self.backward(t, l, y);
+        } else {
+            self.forward(t, l, y);
+        }
+    }
+
+    /// Each part's copy of its columns of y.
+    fn gather(&mut self, y: &[f64]) {
+        for (part, sc) in self.parts.iter().zip(self.scratch.iter_mut()) {
+            sc.x.clear();
+            sc.x.extend(part.cols.iter().map(|&c| y[c as usize]));
+        }
+    }
+
+    /// y ← L⁻¹ y (y permuted, length n), `l` the supernodal factor's values.
+    fn forward(&mut self, t: &Tree, l: &[f64], y: &mut [f64]) {
+        self.gather(y);
+        self.parts
+            .par_iter()
+            .zip(self.scratch.par_iter_mut())
+            .for_each(|(part, sc)| {
+                sc.out.clear();
+                for (i, &s) in part.nodes.iter().enumerate() {
+                    let map = &part.map[part.pat_ptr[i]..part.pat_ptr[i + 1]];
+                    sc.tmp.resize(map.len(), 0.0);
+                    let x = &mut sc.x[part.local[i]..part.local[i + 1]];
+                    node_forward(t.node_l(l, s), x, &mut sc.tmp);
+                    for (&m, &v) in map.iter().zip(&sc.tmp) {
+                        if m == OUTSIDE {
+                            sc.out.push(v);
+                        } else {
+                            sc.x[m as usize] -= v;
+                        }
+                    }
+                }
+            });
+        for (part, sc) in self.parts.iter().zip(&self.scratch) {
+            for (&c, &v) in part.cols.iter().zip(&sc.x) {
+                y[c as usize] = v;
+            }
+        }
+        let mut tmp = Vec::new();
+        for (s, &(pi, i)) in self.part_of.iter().enumerate() {
+            if pi != NONE {
+                let part = &self.parts[pi];
+                let (a, b) = (part.out_ptr[i], part.out_ptr[i + 1]);
+                for (&r, &v) in part.outside[a..b].iter().zip(&self.scratch[pi].out[a..b]) {
+                    y[r as usize] -= v;
+                }
+                continue;
+            }
+            let pattern = t.pattern(s);
+            tmp.resize(pattern.len(), 0.0);
+            let b0 = t.begin[s];
+            node_forward(t.node_l(l, s), &mut y[b0..b0 + t.width(s)], &mut tmp);
+            for (&r, &v) in pattern.iter().zip(&tmp) {
+                y[r as usize] -= v;
+            }
+        }
+    }
+
+    /// y ← L⁻ᵀ y (y permuted, length n), `l` the supernodal factor's values.
+    fn backward(&mut self, t: &Tree, l: &[f64], y: &mut [f64]) {
+        let mut tmp = Vec::new();
+        for (s, &(pi, _)) in self.part_of.iter().enumerate().rev() {
+            if pi == NONE {
+                tmp.clear();
+                tmp.extend(t.pattern(s).iter().map(|&r| y[r as usize]));
+                let b0 = t.begin[s];
+                node_backward(t.node_l(l, s), &mut y[b0..b0 + t.width(s)], &tmp);
+            }
+        }
+        self.gather(y);
+        for (part, sc) in self.parts.iter().zip(self.scratch.iter_mut()) {
+            sc.out.clear();
+            sc.out.extend(part.outside.iter().map(|&r| y[r as usize]));
+        }
+        self.parts
+            .par_iter()
+            .zip(self.scratch.par_iter_mut())
+            .for_each(|(part, sc)| {
+                for (i, &s) in part.nodes.iter().enumerate().rev() {
+                    let map = &part.map[part.pat_ptr[i]..part.pat_ptr[i + 1]];
+                    let mut out = sc.out[part.out_ptr[i]..part.out_ptr[i + 1]].iter();
+                    sc.tmp.clear();
+                    for &m in map {
+                        sc.tmp.push(if m == OUTSIDE {
+                            *out.next().expect("outside row")
+                        } else {
+                            sc.x[m as usize]
+                        });
+                    }
+                    let x = &mut sc.x[part.local[i]..part.local[i + 1]];
+                    node_backward(t.node_l(l, s), x, &sc.tmp);
+                }
+            });
+        for (part, sc) in self.parts.iter().zip(&self.scratch) {
+            for (&c, &v) in part.cols.iter().zip(&sc.x) {
+                y[c as usize] = v;
+            }
+        }
+    }
+}
+
+/// Supernode step of L⁻¹ y as faer's `l_solve_with_conj` does it: x ← L_ss⁻¹ x (x the
+/// supernode's rows of y), tmp ← L_bs x (its rows below the diagonal block, subtracted by
+/// the caller).
+fn node_forward(ls: MatRef<'_, f64>, x: &mut [f64], tmp: &mut [f64]) {
+    let (c, p) = (x.len(), tmp.len());
+    let mut x = MatMut::from_column_major_slice_mut(x, c, 1);
+    solve_lower_triangular_in_place_with_conj(ls.subrows(0, c), Conj::No, x.rb_mut(), Par::Seq);
+    matmul_with_conj(
+        MatMut::from_column_major_slice_mut(tmp, p, 1),
+        Accum::Replace,
+        ls.subrows(c, p),
+        Conj::No,
+        x.rb(),
+        Conj::No,
+        1.0,
+        Par::Seq,
+    );
+}
+
+/// Supernode step of L⁻ᵀ y as faer's `l_transpose_solve_with_conj` does it:
+/// x ← L_ss⁻ᵀ (x − L_bsᵀ tmp), tmp the values of y at the supernode's pattern rows.
+fn node_backward(ls: MatRef<'_, f64>, x: &mut [f64], tmp: &[f64]) {
+    let (c, p) = (x.len(), tmp.len());
+    let mut x = MatMut::from_column_major_slice_mut(x, c, 1);
+    matmul_with_conj(
+        x.rb_mut(),
+        Accum::Add,
+        ls.subrows(c, p).transpose(),
+        Conj::No,
+        MatRef::from_column_major_slice(tmp, p, 1),
+        Conj::No,
+        -1.0,
+        Par::Seq,
+    );
+    solve_upper_triangular_in_place_with_conj(
+        ls.subrows(0, c).transpose(),
+        Conj::No,
+        x.rb_mut(),
+        Par::Seq,
+    );
 }
 
 /// The held backend's analysis, if it holds a successful LLᵀ factorization.
@@ -390,6 +786,42 @@ impl LowRankCorrection {
         Ok(())
     }
 
+    /// rhs ← K_old⁻¹ rhs with the held factor alone, its substitutions on the tree's
+    /// [`Split`] (bit-identical to faer's solve; [`FaerCholesky`]'s `LinearBackend::solve`
+    /// with more than one rayon thread). `false` when that does not apply (nothing
+    /// factorized, a simplicial factor, a tree without parts, one thread, a right-hand
+    /// side of another length): the caller takes faer's solve, which also reports the
+    /// errors.
+    pub(crate) fn solve_held(
+        &mut self,
+        factor: &FaerCholesky,
+        rhs: &mut [f64],
+    ) -> Result<bool, SolveError> {
+        let Ok(an) = held(factor) else {
+            return Ok(false);
+        };
+        if rayon::current_num_threads() <= 1
+            || rhs.len() != an.pattern.n()
+            || !matches!(an.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+        {
+            return Ok(false);
+        }
+        if self.tree.as_ref().map(|t| t.pattern_id) != Some(an.pattern.id()) {
+            self.tree = Some(Tree::new(factor)?);
+        }
+        let tree = self.tree.as_mut().expect("tree");
+        if tree.split.is_none() {
+            return Ok(false);
+        }
+        let mut y: Vec<f64> = tree.fwd.iter().map(|&i| rhs[i]).collect();
+        tree.substitute(an, &mut y, false);
+        tree.substitute(an, &mut y, true);
+        for (p, &i) in tree.fwd.iter().enumerate() {
+            rhs[i] = y[p];
+        }
+        Ok(true)
+    }
+
     /// rhs ← K_new⁻¹ rhs: [`update`](Self::update) for `k_new` unless the last successful
     /// one was made for the same values and the same held factorization (several solves
     /// with one K_new), then [`solve`](Self::solve). The work of
@@ -432,7 +864,7 @@ impl LowRankCorrection {
             )));
         }
         let mut y: Vec<f64> = tree.fwd.iter().map(|&i| rhs[i]).collect();
-        substitute(an, &mut y, false, &mut tree.mem);
+        tree.substitute(an, &mut y, false);
         let r = self.signs.len();
         if r > 0 {
             // z = Wᵀ y, v = C⁻¹ z, y −= W v
@@ -466,7 +898,7 @@ impl LowRankCorrection {
                 }
             }
         }
-        substitute(an, &mut y, true, &mut tree.mem);
+        tree.substitute(an, &mut y, true);
         for (p, &i) in tree.fwd.iter().enumerate() {
             rhs[i] = y[p];
         }
@@ -541,6 +973,11 @@ struct Terms {
     signs: Vec<f64>,
 }
 
+/// A changed entry of K: row, column, new − old value.
+type Change = (usize, usize, f64);
+/// The changes of a chunk of rows, and where it met a non-finite value (row, entry).
+type ScannedRows = (Vec<Change>, Option<(usize, usize)>);
+
 /// ΔK = values of `k_new` − `old`, split into connected blocks and each block into signed
 /// rank-one terms by its eigendecomposition.
 /// `limits`: the largest number of changed entries and of unknowns in one block (refused
@@ -554,24 +991,48 @@ fn split_change(
     let p = &k_new.pattern;
     let n = p.n();
     let (rp, ci) = (p.row_ptr(), p.col_idx());
+    // the scan, in chunks of rows on rayon's threads; each chunk stops at its first
+    // non-finite value or once it alone holds more than `max_entries` changes, and the
+    // chunks are read in order: the same entries and the same error as a sequential scan
+    let chunk_rows = (crate::backend::SAME_BITS_CHUNK * n / rp[n].max(1)).max(1);
+    let scanned: Vec<ScannedRows> = (0..n)
+        .into_par_iter()
+        .step_by(chunk_rows)
+        .map(|r0| {
+            let mut changed = Vec::new();
+            for i in r0..(r0 + chunk_rows).min(n) {
+                for e in rp[i]..rp[i + 1] {
+                    let d = k_new.values[e] - old[e];
+                    if !d.is_finite() {
+                        return (changed, Some((i, e)));
+                    }
+                    if d != 0.0 {
+                        changed.push((i, ci[e] as usize, d));
+                        if changed.len() > max_entries {
+                            return (changed, None);
+                        }
+                    }
+                }
+            }
+            (changed, None)
+        })
+        .collect();
     let mut changed = Vec::new();
-    for i in 0..n {
-        for e in rp[i]..rp[i + 1] {
-            let d = k_new.values[e] - old[e];
-            if !d.is_finite() {
+    for (part, bad) in scanned {
+        for c in part {
+            if changed.len() == max_entries {
                 return Err(SolveError::Other(format!(
-                    "low-rank correction: the new matrix has the non-finite value {} at row {i}, column {}",
-                    k_new.values[e], ci[e]
+                    "low-rank correction: more than {max_entries} entries changed (from row {} on); refactorize",
+                    c.0
                 )));
             }
-            if d != 0.0 {
-                if changed.len() == max_entries {
-                    return Err(SolveError::Other(format!(
-                        "low-rank correction: more than {max_entries} entries changed (from row {i} on); refactorize"
-                    )));
-                }
-                changed.push((i, ci[e] as usize, d));
-            }
+            changed.push(c);
+        }
+        if let Some((i, e)) = bad {
+            return Err(SolveError::Other(format!(
+                "low-rank correction: the new matrix has the non-finite value {} at row {i}, column {}",
+                k_new.values[e], ci[e]
+            )));
         }
     }
     // union-find over the touched unknowns
@@ -1038,6 +1499,210 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The substitutions on the [`Split`]'s parts give faer's sequential ones bit for bit
+    /// (the same operations on every entry, in the same order: see [`Split`]) in rayon
+    /// pools of 1, 2 and 8 threads (the split called directly: `Tree::substitute` takes
+    /// faer's kernels on one thread), forward and backward, on the supernodal factor of
+    /// an 80 × 60 grid (METIS and AMD orderings), whose tree has at least two parts.
+    #[test]
+    fn split_substitution_is_faers_bit_for_bit() {
+        let (n, springs) = grid(80, 60);
+        let k = stiffness(n, &springs, &springs);
+        for name in ["faer-cholesky", "faer-cholesky-metis"] {
+            let mut backend = FaerCholesky::new().with_supernodal_threshold(0.0);
+            if name.ends_with("metis") {
+                backend = backend.with_ordering(crate::ordering::FillOrdering::Metis);
+            }
+            backend.factorize(&k).unwrap();
+            let an = held(&backend).unwrap();
+            let mut tree = Tree::new(&backend).unwrap();
+            let parts = tree.split.as_ref().map_or(0, |s| s.parts.len());
+            assert!(parts >= 2, "{name}: {parts} parts");
+            let f = load(n);
+            for transpose in [false, true] {
+                let mut want = f.clone();
+                substitute(an, &mut want, transpose, &mut tree.mem);
+                for threads in [1, 2, 8] {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .unwrap();
+                    let mut y = f.clone();
+                    let mut split = tree.split.take().expect("split");
+                    pool.install(|| split.substitute(&tree, &an.l_values, &mut y, transpose));
+                    tree.split = Some(split);
+                    assert!(
+                        crate::backend::same_bits(&y, &want),
+                        "{name}, transpose {transpose}, {threads} threads"
+                    );
+                }
+            }
+        }
+    }
+
+    /// [`FaerCholesky`]'s solve on 2 and 8 threads (the split's substitutions) gives its
+    /// solve on one thread (faer's `solve_in_place_with_conj`, permutation included) bit
+    /// for bit, on the 80 × 60 grid with both orderings.
+    #[test]
+    fn held_solve_on_threads_is_faers_bit_for_bit() {
+        let (n, springs) = grid(80, 60);
+        let k = stiffness(n, &springs, &springs);
+        for ordering in [
+            crate::ordering::FillOrdering::Amd,
+            crate::ordering::FillOrdering::Metis,
+        ] {
+            let mut backend = FaerCholesky::new()
+                .with_supernodal_threshold(0.0)
+                .with_ordering(ordering);
+            backend.factorize(&k).unwrap();
+            let f = load(n);
+            let pool = |t| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .unwrap()
+            };
+            let mut want = f.clone();
+            pool(1).install(|| backend.solve(&mut want)).unwrap();
+            let mut c = LowRankCorrection::new();
+            let mut y = f.clone();
+            assert!(!pool(1).install(|| c.solve_held(&backend, &mut y)).unwrap());
+            for threads in [2, 8] {
+                let mut y = f.clone();
+                assert!(pool(threads)
+                    .install(|| c.solve_held(&backend, &mut y))
+                    .unwrap());
+                assert!(
+                    crate::backend::same_bits(&y, &want),
+                    "{ordering:?}, {threads}"
+                );
+                let mut y = f.clone();
+                pool(threads).install(|| backend.solve(&mut y)).unwrap();
+                assert!(
+                    crate::backend::same_bits(&y, &want),
+                    "{ordering:?}, {threads}"
+                );
+            }
+            assert_eq!(backend.stats().solves, 3);
+        }
+    }
+
+    /// Timing of one solve's two substitutions (L⁻¹ then L⁻ᵀ) on the supernodal factor of
+    /// a 120 × 100 grid (24,000 unknowns, x and y uncoupled: two 12,000-unknown problems;
+    /// factor about the size of the deformable 40 × 40 wall P2's): faer's
+    /// sequential kernels against the [`Split`] in pools of 1 and 2 threads, 400 rounds
+    /// taken in turn, minimum and median printed (docs/performance.md, P2 section). Not a
+    /// check of speed (that depends on the machine's load); the bits are checked.
+    /// `cargo test --release -p dfem-kernels --lib split_substitution_timing -- --ignored --nocapture`
+    #[test]
+    #[ignore]
+    fn split_substitution_timing() {
+        let (n, springs) = grid(120, 100);
+        let k = stiffness(n, &springs, &springs);
+        let mut backend = FaerCholesky::new().with_supernodal_threshold(0.0);
+        backend.factorize(&k).unwrap();
+        let an = held(&backend).unwrap();
+        let mut tree = Tree::new(&backend).unwrap();
+        println!(
+            "factor nnz {}, {} parts",
+            an.l_values.len(),
+            tree.split.as_ref().map_or(0, |s| s.parts.len())
+        );
+        let f = load(n);
+        let pools: Vec<rayon::ThreadPool> = [1, 2]
+            .iter()
+            .map(|&t| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .unwrap()
+            })
+            .collect();
+        let mut times = vec![Vec::new(); 3];
+        let mut want = f.clone();
+        for round in 0..400 {
+            let t = Instant::now();
+            let mut y = f.clone();
+            substitute(an, &mut y, false, &mut tree.mem);
+            substitute(an, &mut y, true, &mut tree.mem);
+            times[0].push(t.elapsed().as_secs_f64());
+            if round == 0 {
+                want = y;
+            }
+            for (i, pool) in pools.iter().enumerate() {
+                let t = Instant::now();
+                let mut y = f.clone();
+                let mut split = tree.split.take().expect("split");
+                pool.install(|| {
+                    split.substitute(&tree, &an.l_values, &mut y, false);
+                    split.substitute(&tree, &an.l_values, &mut y, true);
+                });
+                tree.split = Some(split);
+                times[i + 1].push(t.elapsed().as_secs_f64());
+                assert!(crate::backend::same_bits(&y, &want));
+            }
+        }
+        for (name, mut t) in ["faer sequential", "split, 1 thread", "split, 2 threads"]
+            .into_iter()
+            .zip(times)
+        {
+            t.sort_by(f64::total_cmp);
+            println!(
+                "{name}: min {:.1} µs, median {:.1} µs",
+                1e6 * t[0],
+                1e6 * t[t.len() / 2]
+            );
+        }
+    }
+
+    /// The scan of ΔK in chunks of rows (an 80 × 60 grid: 9600 unknowns, three chunks)
+    /// reports what a sequential scan would: with a rank limit of 2 and every entry
+    /// changed, the 129th changed entry's row (the first one, in row order, beyond
+    /// 64 × 2); a NaN in the last chunk after that: still the limit; a NaN with few
+    /// changes before it: the NaN, at its row; and a rank-5 change spread over the
+    /// chunks is split into one block and one term per changed spring direction (x and y
+    /// unknowns are not coupled in this grid): 5 blocks, rank 5.
+    #[test]
+    fn chunked_scan_reports_as_a_sequential_one() {
+        let (n, old) = grid(80, 60);
+        let k_old = stiffness(n, &old, &old);
+        assert!(k_old.values.len() > 2 * crate::backend::SAME_BITS_CHUNK);
+        let limits = Some((ENTRIES_PER_RANK * 2, UNKNOWNS_PER_RANK * 2));
+        let rp = k_old.pattern.row_ptr();
+        let row_of = |e: usize| (0..n).find(|&i| rp[i + 1] > e).unwrap();
+        let mut scaled = k_old.clone();
+        scaled.values.iter_mut().for_each(|v| *v *= 1.001);
+        // entries are numbered row by row: the 129th nonzero change is entry 128
+        let err = |k: &CsrMatrix| match split_change(k, &k_old.values, limits) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("accepted"),
+        };
+        let want = format!(
+            "more than 128 entries changed (from row {} on)",
+            row_of(128)
+        );
+        assert!(err(&scaled).contains(&want), "{}", err(&scaled));
+        let last = k_old.values.len() - 1;
+        scaled.values[last] = f64::NAN;
+        assert!(err(&scaled).contains(&want), "{}", err(&scaled));
+        let mut nan = k_old.clone();
+        nan.values[7] *= 2.0;
+        nan.values[last] = f64::NAN;
+        let e = err(&nan);
+        assert!(
+            e.contains("non-finite") && e.contains(&format!("at row {}", n - 1)),
+            "{e}"
+        );
+        let mut new = old.clone();
+        for s in [3, 4000, 9000] {
+            new[s].k[0] *= 2.0;
+        }
+        new[9500].k = [0.0, 0.0];
+        let terms = split_change(&stiffness(n, &old, &new), &k_old.values, limits).unwrap();
+        let rank: usize = terms.iter().map(|b| b.signs.len()).sum();
+        assert_eq!((terms.len(), rank), (5, 5));
     }
 
     /// A non-finite value in K_new, or a matrix of another size, is an error, not a panic.

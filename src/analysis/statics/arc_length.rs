@@ -247,9 +247,10 @@ enum StepFailure {
 ///
 /// Each slope is bounded by the component's elastic spring, |T_jj| ≤ k_j (the law's
 /// slopes along a component lie within ±k_j: its stiffest response is the elastic one,
-/// and the softening slopes of the walls' joints are far below it, ≤ fₜ²/G_f^I). A
-/// component whose force moved with the other one — a slipping joint's shear force
-/// following μ Fₙ as the joint closes or opens, over a slip of 10⁻¹¹ m — otherwise
+/// and the softening slopes of the walls' joints, about fₜ²/G_f^I per unit area, are
+/// far below it). A component whose force moved with the other one — a slipping
+/// joint's shear force following μ Fₙ as the joint closes or opens, over a slip of
+/// 10⁻¹¹ m — otherwise
 /// gets a chord far stiffer than any slope of the law (7.5·10¹³ N/m against kₛ =
 /// 4·10⁸ N/m in the unit test below), with which the frozen laws meet equilibrium by
 /// moving the contact a negligible distance while the true law does not follow, and the

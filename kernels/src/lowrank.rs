@@ -453,6 +453,15 @@ impl Split {
         }
     }
 
+    /// Each part's copy back into its columns of y.
+    fn scatter(&self, y: &mut [f64]) {
+        for (part, sc) in self.parts.iter().zip(&self.scratch) {
+            for (&c, &v) in part.cols.iter().zip(&sc.x) {
+                y[c as usize] = v;
+            }
+        }
+    }
+
     /// y ← L⁻¹ y (y permuted, length n), `l` the supernodal factor's values.
     fn forward(&mut self, t: &Tree, l: &[f64], y: &mut [f64]) {
         self.gather(y);
@@ -475,11 +484,7 @@ impl Split {
                     }
                 }
             });
-        for (part, sc) in self.parts.iter().zip(&self.scratch) {
-            for (&c, &v) in part.cols.iter().zip(&sc.x) {
-                y[c as usize] = v;
-            }
-        }
+        self.scatter(y);
         let mut tmp = Vec::new();
         for (s, &(pi, i)) in self.part_of.iter().enumerate() {
             if pi != NONE {
@@ -535,11 +540,7 @@ impl Split {
                     node_backward(t.node_l(l, s), x, &sc.tmp);
                 }
             });
-        for (part, sc) in self.parts.iter().zip(&self.scratch) {
-            for (&c, &v) in part.cols.iter().zip(&sc.x) {
-                y[c as usize] = v;
-            }
-        }
+        self.scatter(y);
     }
 }
 

@@ -1194,14 +1194,14 @@ fn joint_cap(
         return Ok(None);
     };
     let fc = check_value(src, at, place, "compressive_strength", fc, true, "Pa")?;
-    if softening == JointSoftening::None {
-        return Err(err_at(
-            src.key_line(at, "compressive_strength"),
-            format!("{place} key 'compressive_strength'"),
-            "the compression cap belongs to softening joints",
-            "add softening = \"exponential\" with the fracture energies, or remove compressive_strength",
-        ));
-    }
+    softening_only(
+        src,
+        at,
+        place,
+        softening,
+        "compressive_strength",
+        "the compression cap",
+    )?;
     let shear_factor = match j.cap_shear_factor {
         None => 9.0,
         Some(v) => check_value(
@@ -1254,6 +1254,27 @@ fn joint_cap(
     }))
 }
 
+/// The error for `key`, a parameter of `what` (a part of the softening joint law), given
+/// on a joint without softening.
+fn softening_only(
+    src: &Src,
+    at: usize,
+    place: &str,
+    softening: JointSoftening,
+    key: &str,
+    what: &str,
+) -> Result<()> {
+    if softening != JointSoftening::None {
+        return Ok(());
+    }
+    Err(err_at(
+        src.key_line(at, key),
+        format!("{place} key '{key}'"),
+        format!("{what} belongs to softening joints"),
+        format!("add softening = \"exponential\" with the fracture energies, or remove {key}"),
+    ))
+}
+
 /// `dilatancy_angle` (degrees, 0 ≤ ψ₀ ≤ φ) and `dilatancy_stress` (Pa, > 0, required
 /// with ψ₀ > 0) of a softening joint: (ψ₀, σᵤ), (0, 0) without dilatancy.
 fn joint_dilatancy(
@@ -1276,14 +1297,14 @@ fn joint_dilatancy(
         return Ok((0.0, 0.0));
     };
     let psi = check_value(src, at, place, "dilatancy_angle", psi, false, "degrees")?;
-    if softening == JointSoftening::None {
-        return Err(err_at(
-            src.key_line(at, "dilatancy_angle"),
-            format!("{place} key 'dilatancy_angle'"),
-            "the dilatancy belongs to softening joints",
-            "add softening = \"exponential\" with the fracture energies, or remove dilatancy_angle",
-        ));
-    }
+    softening_only(
+        src,
+        at,
+        place,
+        softening,
+        "dilatancy_angle",
+        "the dilatancy",
+    )?;
     if psi > friction_angle {
         return Err(err_at(
             src.key_line(at, "dilatancy_angle"),

@@ -250,14 +250,14 @@ enum StepFailure {
 /// and the softening slopes of the walls' joints, about fₜ²/G_f^I per unit area, are
 /// far below it). A component whose force moved with the other one — a slipping
 /// joint's shear force following μ Fₙ as the joint closes or opens, over a slip of
-/// 10⁻¹¹ m — otherwise
-/// gets a chord far stiffer than any slope of the law (7.5·10¹³ N/m against kₛ =
-/// 4·10⁸ N/m in the unit test below), with which the frozen laws meet equilibrium by
-/// moving the contact a negligible distance while the true law does not follow, and the
-/// checks of Eq. F2 return to the same point. With the bound J4D converges in 14 % fewer iterations to the same
-/// curve and J7D goes on down its softening branch (docs/performance.md, "Bounded
-/// chords"). A bounded slope keeps the frozen law through (`d`, `f`), so the check at
-/// the point reached still reads the true force there.
+/// 10⁻¹¹ m — otherwise gets a chord far stiffer than any slope of the law (7.5·10¹³ N/m
+/// against kₛ = 4·10⁸ N/m in the unit test below), with which the frozen laws meet
+/// equilibrium by moving the contact a negligible distance while the true law does not
+/// follow, and the checks of Eq. F2 return to the same point. With the bound J4D
+/// converges in 14 % fewer iterations to the same curve and J7D goes on down its
+/// softening branch (docs/performance.md, "Bounded chords"). A bounded slope keeps the
+/// frozen law through (`d`, `f`), so the check at the point reached still reads the
+/// true force there.
 fn chord_law(
     springs: crate::material::ContactSprings,
     f0: [f64; 2],

@@ -75,6 +75,10 @@ pub struct Stats {
     /// Iterations of the static driver that moved groups of blocks held only by slipping
     /// and open contacts along their free motion (`Driver::free_motion`, docs/theory.md §4).
     pub free_motions: usize,
+    /// Iterations of the static driver whose step length came from the slope line search
+    /// (`Driver::slope_search`, docs/theory.md, "The slope line search") after no
+    /// backtracked length lowered the out-of-balance norm.
+    pub slope_searches: usize,
     /// Arc-length iterations that converged with contacts frozen by the contact-state
     /// corrector and were checked against the true laws (docs/theory.md, Eq. F2).
     pub contact_releases: usize,

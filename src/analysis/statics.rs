@@ -1457,6 +1457,23 @@ impl<'a> Driver<'a> {
                     }
                 }
             }
+            if self.settings.line_search && best.0 >= rn {
+                // no step length lowered the norm, nor did the safeguards' other steps:
+                // the step length where the out-of-balance force stops working along the
+                // correction (see `slope_search`), taken whatever its norm
+                if let Some(alt) = self.slope_search(&dq, &delta, &r, &best.1.history, f_ext, presc)
+                {
+                    if super::tracing() {
+                        eprintln!(
+                            "  slope search: norm {:.3e} -> {:.3e}",
+                            best.0 / scale,
+                            alt.0 / scale
+                        );
+                    }
+                    self.recycle(std::mem::replace(&mut best, alt).1);
+                    self.stats.slope_searches += 1;
+                }
+            }
             if singular_streak >= MODE_STREAK
                 && self.settings.strategy != Strategy::Initial
                 && best.0 > MODE_PROGRESS * rn
@@ -1537,6 +1554,70 @@ impl<'a> Driver<'a> {
             forces: trial.force.clone(),
             loads,
         }
+    }
+
+    /// The slope line search: the step length α* along the correction `delta` from `dq`
+    /// where the out-of-balance force r(α) = f_ext − f_int(dq + α δ) stops doing work along
+    /// δ, the root of s(α) = r(α)·δ (N·m), sought on the grid α = 2⁻ᵏ, k = 0 …
+    /// [`MODE_GRID`], from the largest step down, and interpolated linearly between the
+    /// first grid point where s > 0 and the one before it (docs/theory.md, "The slope line
+    /// search"). Where the contact laws derive from a potential (frozen normal forces, or
+    /// no friction) s is minus the derivative of the total potential energy along δ, so
+    /// α* is its minimum on the line: the step a mechanism's blocks make until a contact
+    /// of theirs closes or sticks, which the norm of r cannot find, because it rises as
+    /// soon as they touch however far they fall before. `None` when δ is not a descent
+    /// direction (s(0) ≤ 0), when s > 0 at α = 1 (the full step already lowers the
+    /// energy everywhere along it), and when the contacts' history at α* is not
+    /// `history`, that of the backtracked step it would replace: a root far along δ may
+    /// carry cohesive joints past their strength, which they do not regain when the next
+    /// iterations correct the step (taken regardless, it cracked the wall over the fault
+    /// of examples/fault_offset, which then followed the drop by 17 mm instead of
+    /// bridging it), and a root short of the backtracked step may spare joints that the
+    /// path cracks. So the search changes where the iterate goes, never which contacts
+    /// have cracked or softened there.
+    fn slope_search(
+        &self,
+        dq: &[f64],
+        delta: &[f64],
+        r0: &[f64],
+        history: &[crate::material::History],
+        f_ext: &[f64],
+        presc: &[Point],
+    ) -> Option<(f64, Trial, Vec<f64>)> {
+        let slope = |r: &[f64]| r.iter().zip(delta).map(|(x, y)| x * y).sum::<f64>();
+        let s0 = slope(r0);
+        if s0 <= 0.0 || !s0.is_finite() {
+            return None;
+        }
+        let at =
+            |alpha: f64| -> Vec<f64> { dq.iter().zip(delta).map(|(a, b)| a + alpha * b).collect() };
+        // (α, s) at the last grid point where the slope was not positive, and at the
+        // first one below it where it is
+        let mut above: Option<(f64, f64)> = None;
+        let mut below = (0.0, s0);
+        let mut alpha = 1.0f64;
+        for _ in 0..=MODE_GRID {
+            let t = self.trial(&at(alpha), presc);
+            let s = slope(&self.out_of_balance(f_ext, &t.f_int));
+            self.recycle(t);
+            if s > 0.0 {
+                below = (alpha, s);
+                break;
+            }
+            above = Some((alpha, s));
+            alpha *= 0.5;
+        }
+        let (ah, sh) = above?;
+        let (al, sl) = below;
+        let root = al + (ah - al) * sl / (sl - sh);
+        let cand = at(root);
+        let t = self.trial(&cand, presc);
+        if t.history != history {
+            self.recycle(t);
+            return None;
+        }
+        let rn = Self::norm(&self.out_of_balance(f_ext, &t.f_int));
+        Some((rn, t, cand))
     }
 
     /// Backtracking on the out-of-balance norm along `delta` from `dq` over the step

@@ -9,15 +9,15 @@
 //!   fixed frame, a circular opening of radius 3 m at its centre, two joint sets dipping
 //!   30° and 120°, deformable corner-node blocks) with the joint spacing s scaled down at
 //!   fixed geometry: s = 2 m (the example), 0.55, 0.175 and 0.055 m (the number of blocks
-//!   about tenfold from one to the next). The opening, the domain and so the in-situ stress (gravity over a
-//!   20 m column) stay the same; only the rock mass is discretized into finer blocks, the
-//!   opening's polygon refined with them (its facets keep the example's 0.29 s). Scaling
-//!   the domain and the opening together at a fixed spacing would instead raise the
-//!   stress with the depth of the domain (γh, tenfold and more at 10⁶ unknowns) and turn a
-//!   3 m tunnel into a 100 m cavern: another problem to a rock engineer, not a finer one.
-//!   The analysis is the example's: gravity alone in the default 10 increments, the
-//!   opening excavated "wished-in-place" (the rock is loaded by its weight with the
-//!   opening already cut; dfem has no staged excavation).
+//!   about tenfold from one to the next). The opening, the domain and so the in-situ
+//!   stress (gravity over a 20 m column) stay the same; only the rock mass is cut into
+//!   finer blocks, the opening's polygon refined with them (its facets keep the example's
+//!   0.29 s). Scaling the domain and the opening together at a fixed spacing would instead
+//!   raise the stress with the depth of the domain (γh, thirty-fold at 10⁶ unknowns) and
+//!   turn the tunnel of radius 3 m into a cavern of radius about 90 m: another problem to
+//!   a rock engineer, not a finer one. The analysis is the example's: gravity alone in the
+//!   default 10 increments, the opening excavated "wished-in-place" (the rock is loaded by
+//!   its weight with the opening already cut; dfem has no staged excavation).
 //!
 //! Each run is a child `dfem run` process (its own peak memory); the table gives the
 //! analysis time (`wall_time_s` of summary.json), iterations, numeric factorizations,

@@ -21,8 +21,8 @@
 //!
 //! Each run is a child `dfem run` process (its own peak memory); the table gives the
 //! analysis time (`wall_time_s` of summary.json), iterations, numeric factorizations,
-//! converged increments, cuts (halvings of a failed increment, from the `--log-json`
-//! lines), free motions (summary.json `stats`), peak memory, and for each kind and thread
+//! converged increments, cuts (halvings of a failed increment, `load_cuts`), free motions
+//! (summary.json `stats`), peak memory, and for each kind and thread
 //! count the exponent p of time ∝ dofs^p fitted by least squares on the logarithms (over
 //! every size run, the failed analyses included: their time is the cost of the failure;
 //! the fit's row says how many failed). A second table gives `dfem check` on each scene
@@ -108,14 +108,6 @@ impl Kind {
         }
     }
 
-    /// The phases of the analysis: (name, planned increments, load factor at the end).
-    fn phases(self) -> &'static [(&'static str, usize, f64)] {
-        match self {
-            Kind::Tunnel => &[("gravity", 10, 1.0)],
-            _ => &[("gravity", 1, 1.0), ("lateral", 5, 0.1)],
-        }
-    }
-
     fn scene(self, size: f64) -> String {
         let text = match self {
             Kind::Tunnel => {
@@ -167,37 +159,6 @@ struct Run {
     result: serde_json::Value,
 }
 
-/// Halvings of the increment in the static phases (`run_phase` in src/analysis/statics.rs
-/// halves the step after a failed increment, up to `max_cuts` = 6 times, and never enlarges
-/// it), from the `--log-json` lines of the converged increments: in a phase that reached
-/// its end, log₂ of the planned step over its last step; a phase that did not reach it
-/// (the analysis failed there) used all 6. `phases`: (name, planned increments, load
-/// factor at the end).
-fn cuts(log: &str, phases: &[(&str, usize, f64)]) -> usize {
-    let lines: Vec<serde_json::Value> = log
-        .lines()
-        .filter(|l| l.starts_with('{'))
-        .filter_map(|l| serde_json::from_str(l).ok())
-        .collect();
-    let mut total = 0;
-    for &(name, planned, end) in phases {
-        let factors: Vec<f64> = lines
-            .iter()
-            .filter(|l| l["phase"] == name)
-            .filter_map(|l| l["load_factor"].as_f64())
-            .collect();
-        match factors.last() {
-            Some(&last) if (last - end).abs() <= 1e-9 * end => {
-                let before = factors.len().checked_sub(2).map_or(0.0, |k| factors[k]);
-                // steps are the planned one over powers of 2: the ratio rounds exactly
-                total += ((end / planned as f64) / (last - before)).log2().round() as usize;
-            }
-            _ => return total + 6,
-        }
-    }
-    total
-}
-
 fn run(dir: &Path, kind: Kind, size: f64, threads: usize) -> Run {
     let file = dir.join(format!("{}_{size}.toml", kind.name()));
     std::fs::write(&file, kind.scene(size)).unwrap();
@@ -210,11 +171,14 @@ fn run(dir: &Path, kind: Kind, size: f64, threads: usize) -> Run {
             out.to_str().unwrap(),
         ])
         .args(["--threads", &threads.to_string(), "--no-plots", "--quiet"])
-        .arg("--log-json")
         .output()
         .expect("run dfem");
-    let log = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{} {size}: {log}", kind.name());
+    assert!(
+        o.status.success(),
+        "{} {size}: {}",
+        kind.name(),
+        String::from_utf8_lossy(&o.stderr)
+    );
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let st = &s["stats"];
@@ -224,7 +188,7 @@ fn run(dir: &Path, kind: Kind, size: f64, threads: usize) -> Run {
         iterations: st["iterations"].as_u64().unwrap(),
         factorizations: st["factorizations"].as_u64().unwrap(),
         increments: st["increments"].as_u64().unwrap(),
-        cuts: cuts(&log, kind.phases()),
+        cuts: st["load_cuts"].as_u64().unwrap() as usize,
         free_motions: st["free_motions"].as_u64().unwrap(),
         memory_mb: st["peak_memory_mb"].as_f64().unwrap_or(f64::NAN),
         status: s["status"].as_str().unwrap_or("?").to_string(),

@@ -52,10 +52,16 @@ fn settle(steps: usize) -> (f64, dfem::analysis::Stats) {
 
 #[test]
 fn tunnel_stands_under_gravity_in_small_and_large_increments() {
-    let (coarse, _) = settle(10);
+    let (coarse, cut) = settle(10);
     let (fine, stats) = settle(50);
     // what made the 50-increment run stand
     assert!(stats.slope_searches > 0, "no slope search: {stats:?}");
+    // the counter of cuts against the increments run: the 50 converge uncut; the first of
+    // the 10 is cut (to a fortieth of the weight, measured) and the phase goes on at that
+    // step, 10 × 2^cuts increments
+    assert_eq!((stats.load_cuts, stats.increments), (0, 50), "{stats:?}");
+    assert!(cut.load_cuts > 0, "{cut:?}");
+    assert_eq!(cut.increments, 10 << cut.load_cuts, "{cut:?}");
     assert!(
         (fine - coarse).abs() <= 0.01 * coarse,
         "settlements {coarse:.5e} m (10 increments) and {fine:.5e} m (50) differ by more than 1 %"

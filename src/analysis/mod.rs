@@ -79,6 +79,12 @@ pub struct Stats {
     /// (`Driver::slope_search`, docs/theory.md, "The slope line search") after no
     /// backtracked length lowered the out-of-balance norm.
     pub slope_searches: usize,
+    /// Halvings of a static increment after it failed (the phases of gravity, lateral
+    /// load, `[[load]]` and prescribed motions, and the arc-length path's halvings of its
+    /// constraints' steps; not the capacity search's retries, which narrow its bracket):
+    /// a phase of `steps` increments whose every cut came in its first increment runs
+    /// `steps × 2^cuts` increments.
+    pub load_cuts: usize,
     /// Arc-length iterations that converged with contacts frozen by the contact-state
     /// corrector and were checked against the true laws (docs/theory.md, Eq. F2).
     pub contact_releases: usize,

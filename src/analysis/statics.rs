@@ -1939,6 +1939,7 @@ impl<'a> Driver<'a> {
                         return Ok((s, Some(describe(&why))));
                     }
                     cuts += 1;
+                    self.stats.load_cuts += 1;
                     ds *= 0.5;
                 }
             }

@@ -122,6 +122,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "tangent_fallbacks": s.tangent_fallbacks,
             "free_motions": s.free_motions,
             "slope_searches": s.slope_searches,
+            "load_cuts": s.load_cuts,
             "contact_releases": s.contact_releases,
             "impact_cuts": s.impact_cuts,
             "held_open": s.held_open,

@@ -1068,6 +1068,7 @@ pub(super) fn run(
                 if cuts < d.settings.max_cuts && !pulls && 0.5 * *size.0 >= size.1 {
                     // cut the step of this constraint and retry
                     cuts += 1;
+                    d.stats.load_cuts += 1;
                     *size.0 *= 0.5;
                     continue;
                 }

@@ -36,7 +36,7 @@
 //! thread count (checked: the block motions of the runs on each thread count are compared
 //! to the bit, and the status, message, failure mode and iteration counts alike).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
@@ -159,9 +159,15 @@ struct Run {
     result: serde_json::Value,
 }
 
-fn run(dir: &Path, kind: Kind, size: f64, threads: usize) -> Run {
+/// Write the scene of `kind` at `size` into `dir` (once per size: `dfem check` and the
+/// runs on every thread count read it).
+fn write_scene(dir: &Path, kind: Kind, size: f64) -> PathBuf {
     let file = dir.join(format!("{}_{size}.toml", kind.name()));
     std::fs::write(&file, kind.scene(size)).unwrap();
+    file
+}
+
+fn run(dir: &Path, file: &Path, kind: Kind, size: f64, threads: usize) -> Run {
     let out = dir.join(format!("{}_{size}_t{threads}", kind.name()));
     let o = Command::new(env!("CARGO_BIN_EXE_dfem"))
         .args([
@@ -207,9 +213,7 @@ fn run(dir: &Path, kind: Kind, size: f64, threads: usize) -> Run {
 /// `dfem check` on the scene: its lines `blocks: N (...)`, `contacts: N`, `dofs: N` and
 /// `time: T s` (its own time from reading the scene to the memory estimate), and the
 /// child process's wall time (s).
-fn check(dir: &Path, kind: Kind, size: f64) -> String {
-    let file = dir.join(format!("{}_{size}.toml", kind.name()));
-    std::fs::write(&file, kind.scene(size)).unwrap();
+fn check(file: &Path, kind: Kind, size: f64) -> String {
     let t0 = Instant::now();
     let o = Command::new(env!("CARGO_BIN_EXE_dfem"))
         .args(["check", file.to_str().unwrap()])
@@ -296,10 +300,11 @@ fn main() {
             if est > 1.5 * max_dofs || 1.5 * est < min_dofs {
                 continue;
             }
-            checks.push(check(&dir, kind, size));
+            let file = write_scene(&dir, kind, size);
+            checks.push(check(&file, kind, size));
             let mut first: Option<serde_json::Value> = None;
             for (ti, &t) in threads.iter().enumerate() {
-                let r = run(&dir, kind, size, t);
+                let r = run(&dir, &file, kind, size, t);
                 println!(
                     "| {} | {} | {} | {t} | {} | {:.3} | {} | {} | {} | {} | {} | {:.0} |",
                     kind.name(),

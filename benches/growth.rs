@@ -18,6 +18,10 @@
 //!   a rock engineer, not a finer one. The analysis is the example's: gravity alone in the
 //!   default 10 increments, the opening excavated "wished-in-place" (the rock is loaded by
 //!   its weight with the opening already cut; dfem has no staged excavation).
+//! * `excavation`: the tunnel's scenes at 100 m depth, starting from the in-situ stress
+//!   of the rock mass (`[in_situ]`: σᵥ from the overburden and the rock's weight, σₕ =
+//!   σᵥ/2), of which the run releases what the opening leaves out of balance (the
+//!   excavation) in the 10 increments of the gravity phase.
 //!
 //! Each run is a child `dfem run` process (its own peak memory); the table gives the
 //! analysis time (`wall_time_s` of summary.json), iterations, numeric factorizations,
@@ -28,10 +32,10 @@
 //! the fit's row says how many failed). A second table gives `dfem check` on each scene
 //! (blocks, contacts, unknowns, and its time).
 //!
-//!     cargo bench --bench growth -- [--kind rigid|deformable|both|tunnel|all]
+//!     cargo bench --bench growth -- [--kind rigid|deformable|both|tunnel|excavation|all]
 //!         [--min-dofs 0] [--max-dofs 2e5] [--threads 1,2]
 //!
-//! `both` is the two walls, `all` the three kinds. Sizes whose estimated unknowns lie
+//! `both` is the two walls, `all` the four kinds. Sizes whose estimated unknowns lie
 //! outside [min-dofs / 1.5, 1.5 max-dofs] are skipped. The results do not depend on the
 //! thread count (checked: the block motions of the runs on each thread count are compared
 //! to the bit, and the status, message, failure mode and iteration counts alike).
@@ -50,13 +54,23 @@ fn arg(name: &str) -> Option<String> {
 /// Stop the bench with a message (bad command-line input).
 fn usage(what: &str) -> ! {
     eprintln!(
-        "growth: {what}\nusage: cargo bench --bench growth -- [--kind rigid|deformable|both|tunnel|all] [--min-dofs 0] [--max-dofs 2e5] [--threads 1,2]"
+        "growth: {what}\nusage: cargo bench --bench growth -- [--kind rigid|deformable|both|tunnel|excavation|all] [--min-dofs 0] [--max-dofs 2e5] [--threads 1,2]"
     );
     std::process::exit(2)
 }
 
 /// `text` with `from` replaced by `to`; `from` must occur (else the example changed and the
 /// bench would silently run another model).
+/// The in-situ stress of the `excavation` kind: the tunnel at 100 m depth below the
+/// domain's top (y = 20 m), σᵥ = γ (120 m − y) with the example's γ = 26 kN/m³, and
+/// σₕ = σᵥ / 2.
+const EXCAVATION: &str = "
+[in_situ]
+datum = 20.0
+stress = [-1.3e6, -2.6e6, 0.0]
+gradient = [13e3, 26e3, 0.0]
+";
+
 fn replace(text: &str, from: &str, to: &str) -> String {
     assert!(
         text.contains(from),
@@ -70,6 +84,8 @@ enum Kind {
     Rigid,
     Deformable,
     Tunnel,
+    /// The tunnel's scenes excavated from an in-situ stress (`[in_situ]`).
+    Excavation,
 }
 
 impl Kind {
@@ -78,6 +94,7 @@ impl Kind {
             Kind::Rigid => "rigid",
             Kind::Deformable => "deformable",
             Kind::Tunnel => "tunnel",
+            Kind::Excavation => "excavation",
         }
     }
 
@@ -87,13 +104,13 @@ impl Kind {
         match self {
             Kind::Rigid => &[18.0, 58.0, 183.0, 577.0],
             Kind::Deformable => &[10.0, 30.0, 95.0, 300.0],
-            Kind::Tunnel => &[2.0, 0.55, 0.175, 0.055],
+            Kind::Tunnel | Kind::Excavation => &[2.0, 0.55, 0.175, 0.055],
         }
     }
 
     fn label(self, size: f64) -> String {
         match self {
-            Kind::Tunnel => format!("s = {size} m"),
+            Kind::Tunnel | Kind::Excavation => format!("s = {size} m"),
             _ => format!("{size} × {size}"),
         }
     }
@@ -104,18 +121,25 @@ impl Kind {
         match self {
             Kind::Rigid => 3.0 * size * size,
             Kind::Deformable => 11.0 * size * size,
-            Kind::Tunnel => 8.0 * (400.0 - 9.0 * std::f64::consts::PI) / (size * size),
+            Kind::Tunnel | Kind::Excavation => {
+                8.0 * (400.0 - 9.0 * std::f64::consts::PI) / (size * size)
+            }
         }
     }
 
     fn scene(self, size: f64) -> String {
         let text = match self {
-            Kind::Tunnel => {
+            Kind::Tunnel | Kind::Excavation => {
                 // the example's 32 segments at s = 2 m: facets of 0.29 s
                 let segments = (32.0 * 2.0 / size).round();
                 let t = dfem::scene::examples::get("tunnel").expect("the tunnel example");
                 let t = replace(t, "spacing = 2.0", &format!("spacing = {size}"));
-                replace(&t, "segments = 32", &format!("segments = {segments}"))
+                let t = replace(&t, "segments = 32", &format!("segments = {segments}"));
+                if self == Kind::Excavation {
+                    t + EXCAVATION
+                } else {
+                    t
+                }
             }
             _ => {
                 let n = size as usize;
@@ -258,10 +282,16 @@ fn exponent(runs: &[(f64, f64)]) -> f64 {
 fn main() {
     let kinds: Vec<Kind> = match arg("--kind").as_deref() {
         None | Some("both") => vec![Kind::Rigid, Kind::Deformable],
-        Some("all") => vec![Kind::Rigid, Kind::Deformable, Kind::Tunnel],
+        Some("all") => vec![
+            Kind::Rigid,
+            Kind::Deformable,
+            Kind::Tunnel,
+            Kind::Excavation,
+        ],
         Some("rigid") => vec![Kind::Rigid],
         Some("deformable") => vec![Kind::Deformable],
         Some("tunnel") => vec![Kind::Tunnel],
+        Some("excavation") => vec![Kind::Excavation],
         Some(k) => usage(&format!("unknown --kind '{k}'")),
     };
     let number = |name: &str, default: f64| {

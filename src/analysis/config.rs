@@ -45,6 +45,33 @@ impl Committed {
             history: vec![[0.0; 2]; mesh.contacts.len()],
         }
     }
+
+    /// The state of the rock before an excavation (docs/theory.md, "In-situ stress"): every
+    /// triangle carries the in-situ stress σ₀ at its centroid, and every contact the
+    /// traction σ₀ n of the joint at its point times its area `length × thickness` (m²):
+    /// Fₙ = n·σ₀n A, Fₛ = t·σ₀n A (N; n from block l into block m, t = (−n_y, n_x)). Block
+    /// m's triangles then pull on its boundary nodes with −σ₀n per unit length and the
+    /// contact pushes back with +σ₀n, so that where σ₀ balances gravity
+    /// (∂σ₀/∂y = −ρg per component), the initial internal forces balance the self-weight
+    /// everywhere but on the excavated boundary, up to the tributary lengths' quadrature.
+    pub fn in_situ(mesh: &Mesh, field: &crate::scene::InSitu, thickness: f64) -> Self {
+        let mut c = Committed::zero(mesh);
+        for (s, tri) in c.stress.iter_mut().zip(&mesh.triangles) {
+            let y = tri.iter().map(|&k| mesh.nodes[k as usize][1]).sum::<f64>() / 3.0;
+            *s = field.at(y);
+        }
+        for (f, k) in c.force.iter_mut().zip(&mesh.contacts) {
+            let [sxx, syy, sxy] = field.at(mesh.nodes[k.node_m as usize][1]);
+            let n = k.normal;
+            let tr = [sxx * n[0] + sxy * n[1], sxy * n[0] + syy * n[1]];
+            let a = k.length * thickness;
+            *f = [
+                a * (n[0] * tr[0] + n[1] * tr[1]),
+                a * (-n[1] * tr[0] + n[0] * tr[1]),
+            ];
+        }
+        c
+    }
 }
 
 /// A trial increment evaluated: positions, stresses, contact forces and the internal force

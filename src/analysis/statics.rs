@@ -314,6 +314,10 @@ pub struct Driver<'a> {
     /// (tolerance × the force scale): a tangent correction by GMRES is solved to a tenth of
     /// it ([`Driver::tangent_with_secant_factor`]).
     converged_norm: f64,
+    /// The smallest force that measures the out-of-balance force (N): the norm of the
+    /// load an in-situ stress leaves out of balance (the excavation), which is what the
+    /// run releases when there is no gravity; zero without an in-situ stress.
+    scale_floor: f64,
     pub stats: Stats,
     backend: &'a mut dyn LinearBackend,
     lu: Option<Box<dyn LinearBackend>>,
@@ -556,7 +560,10 @@ impl<'a> Driver<'a> {
             law,
             area,
             cur: mesh.clone(),
-            committed: Committed::zero(mesh),
+            committed: match &scene.in_situ {
+                Some(f) => Committed::in_situ(mesh, f, scene.model.thickness),
+                None => Committed::zero(mesh),
+            },
             kbuf,
             kbuf_local: None,
             aux,
@@ -565,6 +572,7 @@ impl<'a> Driver<'a> {
             held_on_cur: Vec::new(),
             gmres_failed: false,
             converged_norm: 0.0,
+            scale_floor: 0.0,
             stats: Stats {
                 dofs: mesh.n_dofs,
                 contacts: mesh.contacts.len(),
@@ -749,7 +757,7 @@ impl<'a> Driver<'a> {
         for &(d, _) in &self.pins {
             s2 += f_int[d] * f_int[d] - f_ext[d] * f_ext[d];
         }
-        s2.max(0.0).sqrt().max(1e-300)
+        s2.max(0.0).sqrt().max(self.scale_floor).max(1e-300)
     }
 
     /// Solve with the elastic stiffness of the initial configuration (factorized once).
@@ -2136,11 +2144,27 @@ pub fn run_with_progress<'a>(
         ));
     }
 
-    // phase 1: gravity and loads
+    // phase 1: gravity and loads; from an in-situ stress, the release of its out-of-
+    // balance force (the excavation): from the internal forces of the initial state, in
+    // equilibrium with themselves, to gravity and the loads (docs/theory.md, "In-situ
+    // stress")
     let f_grav = d.external(g, true);
+    let base = match scene.in_situ {
+        None => vec![0.0; n],
+        Some(_) => {
+            let t = d.trial(&vec![0.0; n], &zero_presc);
+            let f0 = t.f_int.clone();
+            d.recycle(t);
+            f0
+        }
+    };
+    let step: Vec<f64> = f_grav.iter().zip(&base).map(|(g, b)| g - b).collect();
+    if scene.in_situ.is_some() {
+        d.scale_floor = Driver::norm(&step);
+    }
     let phase = Phase {
-        base: vec![0.0; n],
-        step: f_grav.clone(),
+        step,
+        base,
         presc_step: zero_presc.clone(),
         pin_step: Vec::new(),
         record: None,
@@ -2148,12 +2172,14 @@ pub fn run_with_progress<'a>(
     d.begin_phase("gravity", Some(gravity_steps), 1.0);
     let (s, why) = d.run_phase(&phase, gravity_steps)?;
     if let Some(why) = why {
+        let of = if scene.in_situ.is_some() {
+            "of the excavation (the in-situ stress's out-of-balance force released)"
+        } else {
+            "of the self-weight"
+        };
         return Ok(fail(
             &mut d,
-            format!(
-                "failed under gravity at {:.1} % of the self-weight: {why}",
-                100.0 * s
-            ),
+            format!("failed under gravity at {:.1} % {of}: {why}", 100.0 * s),
             None,
         ));
     }

@@ -30,6 +30,30 @@ pub struct Model {
     pub gravity: [f64; 2],
 }
 
+/// `[in_situ]`: the stress of the rock before the excavation (docs/theory.md, "In-situ
+/// stress"), a field linear in the height: σ(y) = `stress` + (y − `datum`) `gradient`
+/// (σxx, σyy, σxy; Pa, tension positive). Static and capacity analyses start from it:
+/// the blocks' triangles carry it and every contact the traction it puts on the joint,
+/// and the gravity phase releases the out-of-balance force of that state (the
+/// excavation) in its increments.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InSitu {
+    /// σ at y = `datum` (Pa).
+    pub stress: [f64; 3],
+    /// dσ/dy (Pa/m).
+    pub gradient: [f64; 3],
+    /// m.
+    pub datum: f64,
+}
+
+impl InSitu {
+    /// The in-situ stress (σxx, σyy, σxy) (Pa) at height `y` (m).
+    pub fn at(&self, y: f64) -> [f64; 3] {
+        let h = y - self.datum;
+        [0, 1, 2].map(|i| self.stress[i] + h * self.gradient[i])
+    }
+}
+
 /// `[[material]]`: an elastic (Kelvin–Voigt) block material (METHOD.md section 2).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Material {
@@ -234,6 +258,8 @@ pub struct Scene {
     pub loads: Vec<Load>,
     pub analysis: Analysis,
     pub output: Output,
+    /// `[in_situ]`, if given.
+    pub in_situ: Option<InSitu>,
     /// Where the scene came from (for error messages); `None` for built-in text.
     pub file: Option<std::path::PathBuf>,
     /// Warnings found while reading (clockwise polygons reversed, ...), one line each.

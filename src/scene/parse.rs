@@ -35,6 +35,15 @@ struct RawScene {
     load: Vec<Spanned<RawLoad>>,
     analysis: Option<Spanned<toml::Table>>,
     output: Option<Spanned<RawOutput>>,
+    in_situ: Option<Spanned<RawInSitu>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawInSitu {
+    stress: Option<[f64; 3]>,
+    gradient: Option<[f64; 3]>,
+    datum: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -1018,6 +1027,52 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
         }
     };
 
+    // [in_situ]
+    let in_situ = match &raw.in_situ {
+        None => None,
+        Some(r) => {
+            let at = r.span().start;
+            let r = r.get_ref();
+            let Some(stress) = r.stress else {
+                return Err(err_at(
+                    src.line(at),
+                    "[in_situ]",
+                    "the in-situ stress needs 'stress'",
+                    "give stress = [σxx, σyy, σxy] in Pa at y = datum, tension positive, for example stress = [-1.0e6, -2.0e6, 0.0]",
+                ));
+            };
+            let gradient = r.gradient.unwrap_or([0.0; 3]);
+            let datum = r.datum.unwrap_or(0.0);
+            for (key, ok) in [
+                ("stress", stress.iter().all(|x| x.is_finite())),
+                ("gradient", gradient.iter().all(|x| x.is_finite())),
+                ("datum", datum.is_finite()),
+            ] {
+                if !ok {
+                    return Err(err_at(
+                        src.key_line(at, key),
+                        format!("[in_situ] key '{key}'"),
+                        format!("'{key}' must be finite"),
+                        "give finite numbers: stress in Pa, gradient in Pa/m, datum in m",
+                    ));
+                }
+            }
+            if analysis.kind == AnalysisType::Dynamic {
+                return Err(err_at(
+                    src.line(at),
+                    "[in_situ]",
+                    "a dynamic analysis does not start from an in-situ stress",
+                    "remove [in_situ], or run the excavation as a static analysis (type = \"static\")",
+                ));
+            }
+            Some(InSitu {
+                stress,
+                gradient,
+                datum,
+            })
+        }
+    };
+
     Ok(Scene {
         title: raw.title.unwrap_or_default(),
         model,
@@ -1028,6 +1083,7 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
         loads,
         analysis,
         output,
+        in_situ,
         file: file.map(Path::to_path_buf),
         warnings,
     })

@@ -101,7 +101,6 @@ cases! {
     tension_cut_off_beyond_apex,
     all_fixed,
     checkpoint_every_zero,
-    in_situ_dynamic,
     in_situ_without_stress,
     degenerate_collinear,
     degenerate_two_vertices,

@@ -19,7 +19,9 @@
 //!   (b = 42.4 m); the reference is their mean, 0.978, and the mean radial displacement of
 //!   the opening's 32 corners must be within 3 % of it (the outer boundary's ±0.7 %,
 //!   and the constant-strain triangles' and polygonal opening's discretisation error,
-//!   measured at −0.9 %).
+//!   measured at −2.5 %, falling to −1.1 % with finer triangles: the ignored test).
+//! * Dynamic runs start from the same state: the stack started at rest stays at rest, and
+//!   the excavated tunnel comes to rest, in a damped run, where the static run stands.
 
 mod common;
 use dfem::analysis::Status;
@@ -167,4 +169,70 @@ fn the_closure_converges_as_the_blocks_are_meshed_finer() {
         .collect();
     eprintln!("errors {errors:?}");
     assert!(errors[1] < errors[0] && errors[2] < errors[1], "{errors:?}");
+}
+
+#[test]
+fn a_stack_in_its_own_in_situ_stress_stays_at_rest_in_a_dynamic_run() {
+    let text =
+        stack("[in_situ]\ndatum = 5.0\nstress = [0.0, 0.0, 0.0]\ngradient = [0.0, 25e3, 0.0]\n")
+            .replace(
+                "type = \"static\"",
+                "type = \"dynamic\"\ndt = 0.001\nduration = 0.02\ninitial = \"rest\"",
+            );
+    let (_, out) = common::solve(&common::scene(&text));
+    assert_eq!(out.status, Status::Stable);
+    let moved = largest_displacement(&out);
+    eprintln!("from rest in the in-situ stress: {moved:.4e} m");
+    // gravity alone settles the stack by 4.7 µm (the first test): 10⁻¹⁵ m is 2·10⁻¹⁰ of
+    // it, round-off (measured 8·10⁻²⁰ m)
+    assert!(moved < 1e-15, "the stack moved {moved} m");
+}
+
+/// The excavation of the 2 m-jointed tunnel (the growth bench's `excavation` kind at its
+/// smallest size) run statically and as a damped dynamic run from the in-situ stress
+/// (elastic start, then 0.5 s with mass-proportional damping a₀ = 20/s, about 2.5 times
+/// the critical damping of the rock mass's first mode): both come to rest at the same
+/// state, up to the path dependence of friction. Measured: largest block displacement
+/// 0.3133 mm (static, 10 increments) and 0.3130 mm (dynamic), 0.08 % apart; 2 % allowed.
+#[test]
+fn the_excavated_tunnel_comes_to_rest_where_the_static_run_stands() {
+    let text = dfem::scene::examples::get("tunnel").unwrap().to_string()
+        + "[in_situ]\ndatum = 20.0\nstress = [-1.3e6, -2.6e6, 0.0]\ngradient = [13e3, 26e3, 0.0]\n";
+    let largest = |out: &dfem::analysis::Outcome, mesh: &dfem::mesh::Mesh| {
+        (0..mesh.blocks.len())
+            .map(|b| {
+                let d = dfem::analysis::outcome_motion(mesh, b, out).0;
+                d[0].hypot(d[1])
+            })
+            .fold(0.0, f64::max)
+    };
+    let (mesh, stat) = common::solve(&common::scene(&text));
+    assert_eq!(stat.status, Status::Stable);
+    let dyn_text = text.replace(
+        "type = \"static\"",
+        "type = \"dynamic\"\ndt = 0.005\nduration = 0.5\nrayleigh = [20.0, 0.0]",
+    );
+    let (_, dynamic) = common::solve(&common::scene(&dyn_text));
+    assert_eq!(dynamic.status, Status::Stable);
+    let (s, d) = (largest(&stat, &mesh), largest(&dynamic, &mesh));
+    eprintln!("largest block displacement: static {s:.5e} m, dynamic {d:.5e} m");
+    assert!(s > 1e-4, "the opening closes: {s} m");
+    assert!(common::rel_err(d, s) < 0.02, "static {s} m, dynamic {d} m");
+}
+
+/// An in-situ stress whose gradient does not balance the rock's weight is read with a
+/// warning that names the material and the balancing gradient; one that does, without.
+#[test]
+fn an_in_situ_stress_out_of_equilibrium_with_gravity_is_warned_about() {
+    let with = |g: &str| {
+        common::scene(&(stack("") + &format!("[in_situ]\ndatum = 5.0\nstress = [0.0, 0.0, 0.0]\ngradient = [0.0, {g}, 0.0]\n")))
+            .warnings
+    };
+    assert!(with("25e3").is_empty(), "{:?}", with("25e3"));
+    let w = with("20e3");
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("material 'rock'") && w[0].contains("(25000, 0 Pa/m)"),
+        "{w:?}"
+    );
 }

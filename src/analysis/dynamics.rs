@@ -541,7 +541,10 @@ impl<'a> Dynamics<'a> {
             visc,
             area,
             cur: mesh.clone(),
-            committed: Committed::zero(mesh),
+            committed: match &scene.in_situ {
+                Some(f) => Committed::in_situ(mesh, f, scene.model.thickness),
+                None => Committed::zero(mesh),
+            },
             v: vec![0.0; n],
             a: vec![0.0; n],
             f_int: vec![0.0; n],
@@ -563,6 +566,9 @@ impl<'a> Dynamics<'a> {
             ground_u: [0.0; 2],
             ground_v: [0.0; 2],
         };
+        if d.scene.in_situ.is_some() {
+            d.start_from_committed();
+        }
         if d.settings.preload {
             d.preload()?;
         }
@@ -616,9 +622,26 @@ impl<'a> Dynamics<'a> {
         }
     }
 
-    /// The initial state: the elastic equilibrium K₀ u₀ = F_static of gravity and loads
-    /// (every contact sticking, no strength limit), then the contact forces returned to
-    /// their strength. Contacts that carry the weight from t = 0 do not bounce (the
+    /// The committed state returned to the contacts' strength envelope, its internal
+    /// forces, and its elastic energy as the energy audit's origin: the start of a run,
+    /// from the in-situ state (docs/theory.md, "In-situ stress": the stresses and contact
+    /// forces of Eq. I1; from rest, `initial = "rest"`, the out-of-balance force of the
+    /// excavation then acts at t = 0, a sudden excavation) or from the elastic
+    /// equilibrium of [`Dynamics::preload`].
+    fn start_from_committed(&mut self) {
+        let back = self.trial(&vec![0.0; self.cur.n_dofs]);
+        self.committed.force = back.force;
+        self.committed.state = back.state;
+        self.committed.stress = back.stress;
+        self.f_int = back.f_int;
+        self.energy.elastic =
+            self.elastic_energy(&self.cur, &self.committed.stress, &self.committed.force);
+        self.energy.elastic0 = self.energy.elastic;
+    }
+
+    /// The initial state: the elastic equilibrium K₀ u₀ = F_static − F_int of gravity and
+    /// loads (F_int: the in-situ state's internal forces, zero without one; every contact
+    /// sticking, no strength limit), then the contact forces returned to their strength. Contacts that carry the weight from t = 0 do not bounce (the
     /// chatter of stiff contacts started without force), and a block whose friction
     /// cannot hold it starts sliding with the right acceleration. Skipped when K₀ is
     /// singular (a block that touches nothing).
@@ -630,12 +653,18 @@ impl<'a> Dynamics<'a> {
             .collect();
         self.system
             .stiffness_into(&self.cur, &local, &mut self.kbuf);
-        let mut x = self.f_static.clone();
+        let mut x: Vec<f64> = self
+            .f_static
+            .iter()
+            .zip(&self.f_int)
+            .map(|(f, g)| f - g)
+            .collect();
+        let load = norm(&x);
         let ok = self.backend.factorize(&self.kbuf).is_ok()
             && !super::singular_pivots(&*self.backend)
             && self.backend.solve(&mut x).is_ok()
             && x.iter().all(|v| v.is_finite());
-        if !ok || norm(&self.f_static) == 0.0 {
+        if !ok || load == 0.0 {
             return Ok(());
         }
         let presc = vec![[0.0; 2]; self.cur.blocks.len()];
@@ -654,14 +683,7 @@ impl<'a> Dynamics<'a> {
         self.committed.force = el.force;
         self.cur = el.mesh;
         // the same state returned to the strength envelope
-        let back = self.trial(&vec![0.0; self.cur.n_dofs]);
-        self.committed.force = back.force;
-        self.committed.state = back.state;
-        self.committed.stress = back.stress;
-        self.f_int = back.f_int;
-        self.energy.elastic =
-            self.elastic_energy(&self.cur, &self.committed.stress, &self.committed.force);
-        self.energy.elastic0 = self.energy.elastic;
+        self.start_from_committed();
         Ok(())
     }
 
@@ -1586,6 +1608,7 @@ impl<'a> Dynamics<'a> {
             current: Some(self.cur.clone()),
             history: None,
             capacity_curve: None,
+            fallen: Vec::new(),
         }
     }
 }

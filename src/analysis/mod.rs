@@ -79,6 +79,9 @@ pub struct Stats {
     /// (`Driver::slope_search`, docs/theory.md, "The slope line search") after no
     /// backtracked length lowered the out-of-balance norm.
     pub slope_searches: usize,
+    /// Blocks that fell out of the structure and were taken out of the analysis
+    /// (`[analysis] fallout = true`, docs/theory.md "Fallout").
+    pub fallen_blocks: usize,
     /// Halvings of a static increment after it failed (the phases of gravity, lateral
     /// load, `[[load]]` and prescribed motions, and the arc-length path's halvings of its
     /// constraints' steps; not the capacity search's retries, which narrow its bracket):
@@ -139,6 +142,9 @@ pub struct Outcome {
     pub capacity_curve: Option<curve::Curve>,
     /// Dynamic: the time history (history.csv).
     pub history: Option<dynamics::History>,
+    /// Static with `fallout = true`: the blocks that fell out of the structure, in the
+    /// order they fell (docs/theory.md, "Fallout").
+    pub fallen: Vec<usize>,
 }
 
 /// Pivot ratio below which the factorization is taken as singular: a mechanism (METHOD.md

@@ -59,6 +59,9 @@ pub struct Settings {
     pub initial_step: f64,
     pub bracket: f64,
     pub line_search: bool,
+    /// Take the blocks of a local failure out of the analysis and go on without them
+    /// (`fallout`, default off; [`Driver::fall_out`]).
+    pub fallout: bool,
     /// Keep the held secant factorization across load increments (`reuse_across_increments`,
     /// default off): the first corrections of an increment are then solved by conjugate
     /// gradients preconditioned with it, corrected for the contacts that changed state
@@ -201,6 +204,7 @@ impl Settings {
             initial_step: num("initial_step", 0.05, 1e-9, 1e3)?,
             bracket: num("bracket", 1e-3, 1e-9, 0.5)?,
             line_search: switch("line_search", strategy != Strategy::Initial)?,
+            fallout: switch("fallout", false)?,
             reuse_across_increments: switch("reuse_across_increments", false)?,
             push: Push::from_scene(scene)?,
             arc: None,
@@ -254,6 +258,7 @@ pub const KEYS: &[&str] = &[
     "initial_step",
     "bracket",
     "line_search",
+    "fallout",
     "reuse_across_increments",
     "push_block",
     "push_displacement",
@@ -344,6 +349,12 @@ pub struct Driver<'a> {
     /// current arc-length increment (the contact-state corrector, docs/theory.md,
     /// "Contact-state corrector", Eq. F1; empty, or all `None`, elsewhere).
     frozen: Vec<Option<Frozen>>,
+    /// The blocks that fell out ([`Driver::fall_out`]), in the order they fell.
+    fallen: Vec<usize>,
+    /// Per contact: it touches a fallen block, and carries no force.
+    fallen_contact: Vec<bool>,
+    /// The unknowns of the fallen blocks, held where the blocks fell out.
+    fallen_pins: Vec<(usize, f64)>,
     /// Configurations of trials no longer needed (at most [`SPARE_MESHES`]), whose memory
     /// the next trials reuse ([`Driver::recycle`]; all of `cur`'s topology, which a static
     /// run never changes).
@@ -507,6 +518,13 @@ const LINE_SEARCH_STEPS: usize = 4;
 /// Step lengths 1 … 2⁻¹¹ of the line search along the tangent step that replaces a secant
 /// step which does not lower the out-of-balance norm.
 const SAFEGUARD_STEPS: usize = 12;
+/// Fallout ([`Driver::fall_out`]): a failure mode that moves at most this many blocks, or
+/// [`FALLOUT_MAX_SHARE`] of the free blocks if that is more, is a local failure (key
+/// blocks falling out of a tunnel's roof: 5 of the 1,348 blocks of the growth bench's
+/// excavation at s = 0.55 m, docs/performance.md); a larger one is the structure's.
+const FALLOUT_MAX_BLOCKS: usize = 8;
+/// See [`FALLOUT_MAX_BLOCKS`].
+const FALLOUT_MAX_SHARE: f64 = 0.01;
 /// Fraction of the best residual an iteration must reach to count as progress.
 const STALL_PROGRESS: f64 = 0.9;
 
@@ -590,6 +608,9 @@ impl<'a> Driver<'a> {
             push_curve: Vec::new(),
             flips: Vec::new(),
             frozen: Vec::new(),
+            fallen: Vec::new(),
+            fallen_contact: vec![false; mesh.contacts.len()],
+            fallen_pins: Vec::new(),
             spare: std::sync::Mutex::new(Vec::new()),
         })
     }
@@ -636,6 +657,17 @@ impl<'a> Driver<'a> {
             }
             t.force[k] = fa;
             t.state[k] = fr.state;
+        }
+        if !self.fallen.is_empty() {
+            for (k, _) in self.fallen_contact.iter().enumerate().filter(|c| *c.1) {
+                let f = t.force[k];
+                if f != [0.0, 0.0] {
+                    let map = crate::assembly::contact_map(&t.mesh, &t.mesh.contacts[k]);
+                    crate::assembly::add_mapped_force(&map, [-f[0], -f[1]], &mut t.f_int);
+                }
+                t.force[k] = [0.0, 0.0];
+                t.state[k] = ContactState::Open;
+            }
         }
         t
     }
@@ -1894,7 +1926,7 @@ impl<'a> Driver<'a> {
         // (a linear extrapolation of the path, which saves the first iterations of every
         // increment of a proportional loading)
         let mut last: Option<(f64, Vec<f64>)> = None;
-        if !phase.pin_step.is_empty() || !self.pins.is_empty() {
+        if !phase.pin_step.is_empty() || !self.pins.is_empty() || !self.fallen.is_empty() {
             // the held factorizations were computed with other unknowns pinned
             self.held = Held::Nothing;
         }
@@ -1919,6 +1951,7 @@ impl<'a> Driver<'a> {
                 .pin_step
                 .iter()
                 .map(|&(d, v)| (d, v * (target - s)))
+                .chain(self.fallen_pins.iter().copied())
                 .collect();
             // (not under a prescribed motion, whose elastic predictor starts closer: a
             // settlement or fault offset that slips joints changes its path every increment)
@@ -1944,6 +1977,14 @@ impl<'a> Driver<'a> {
                 Err((why, dq)) => {
                     self.failure_mode = Some(dq);
                     if cuts >= self.settings.max_cuts {
+                        if self.settings.fallout && self.fall_out() {
+                            // the rest of the structure takes the phase again from
+                            // where it stood, in the phase's own increments
+                            cuts = 0;
+                            ds = 1.0 / steps as f64;
+                            last = None;
+                            continue;
+                        }
                         return Ok((s, Some(describe(&why))));
                     }
                     cuts += 1;
@@ -1954,6 +1995,56 @@ impl<'a> Driver<'a> {
         }
         self.pins.clear();
         Ok((1.0, None))
+    }
+
+    /// Fallout (docs/theory.md, "Fallout"): the blocks that move in the failure mode of
+    /// the failed increment ([`Driver::failure_mode`], classified by
+    /// [`super::mechanism::classify`]) fall out of the structure when they are few: at
+    /// most [`FALLOUT_MAX_BLOCKS`] or [`FALLOUT_MAX_SHARE`] of the free blocks at a time.
+    /// Each is held where it stood at the last converged increment (its unknowns pinned),
+    /// and its contacts carry no force from then on; the committed state keeps the rest.
+    /// Returns whether any block fell; a larger mechanism is the structure's failure.
+    fn fall_out(&mut self) -> bool {
+        let Some(f) = self.failure_mode.as_ref() else {
+            return false;
+        };
+        let mech = super::mechanism::classify(
+            self.scene, &self.cur, &f.mode, &f.states, &f.forces, &f.loads,
+        );
+        let moving: Vec<usize> = mech
+            .moving()
+            .into_iter()
+            .filter(|b| !self.fallen.contains(b))
+            .collect();
+        let free = self
+            .cur
+            .blocks
+            .iter()
+            .filter(|b| b.dofs != crate::mesh::BlockDofs::Fixed)
+            .count();
+        let limit = FALLOUT_MAX_BLOCKS.max((FALLOUT_MAX_SHARE * free as f64) as usize);
+        if moving.is_empty() || moving.len() > limit {
+            return false;
+        }
+        let dofs = self.block_dofs();
+        for &b in &moving {
+            self.fallen_pins.extend(dofs[b].iter().map(|&d| (d, 0.0)));
+        }
+        for (k, c) in self.cur.contacts.iter().enumerate() {
+            if moving.contains(&(c.block_l as usize)) || moving.contains(&(c.block_m as usize)) {
+                self.fallen_contact[k] = true;
+                self.committed.force[k] = [0.0, 0.0];
+                self.committed.state[k] = ContactState::Open;
+            }
+        }
+        if super::tracing() {
+            eprintln!("fallout: blocks {moving:?} fall out");
+        }
+        self.stats.fallen_blocks += moving.len();
+        self.fallen.extend(moving);
+        self.held = Held::Nothing;
+        self.failure_mode = None;
+        true
     }
 
     /// The forces (N, horizontal and vertical) and moment (N·m) that hold the rigid block
@@ -2026,6 +2117,7 @@ impl<'a> Driver<'a> {
             current: Some(self.cur.clone()),
             capacity_curve: None,
             history: None,
+            fallen: self.fallen.clone(),
         }
     }
 }

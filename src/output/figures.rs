@@ -71,7 +71,7 @@ pub struct Deformed {
     /// One line: the status, the failure mode and λ.
     pub status: String,
     /// Blocks that move in the failure mechanism (summary.json `failure.blocks` whose
-    /// motion is not "none"), by block number.
+    /// motion is not "none"), or that fell out (`fallen`), by block number.
     pub moving: Vec<u32>,
 }
 
@@ -88,13 +88,18 @@ pub struct ContactMark {
 /// blocks, and `blocks` lists every free block in block order, so the k-th free block
 /// (not fixed) of the cells is the k-th entry of `blocks`.
 fn moving_blocks(summary: &serde_json::Value, cell_block: &[u32], cell_fixed: &[bool]) -> Vec<u32> {
-    let Some(failed) = summary["failure"]["blocks"].as_array() else {
+    let failed = summary["failure"]["blocks"].as_array();
+    // the blocks that fell out (`fallout`), drawn as the mechanism is
+    let fallen = summary["fallen"].as_array();
+    if failed.is_none() && fallen.is_none_or(|f| f.is_empty()) {
         return Vec::new();
-    };
+    }
     let moving: std::collections::HashSet<&str> = failed
-        .iter()
+        .into_iter()
+        .flatten()
         .filter(|b| b["motion"].as_str().is_some_and(|m| m != "none"))
         .filter_map(|b| b["name"].as_str())
+        .chain(fallen.into_iter().flatten().filter_map(|b| b.as_str()))
         .collect();
     let mut free: Vec<u32> = cell_block
         .iter()
@@ -688,7 +693,11 @@ fn draw_deformed<DB: DrawingBackend>(
         format!("open contact ({})", count(OPEN)),
         format!("slipping contact ({})", count(SLIP)),
     );
-    let mech_label = format!("mechanism ({} blocks)", fig.moving.len());
+    let mech_label = if fig.status.starts_with("stable") {
+        format!("fallen out ({} blocks)", fig.moving.len())
+    } else {
+        format!("mechanism ({} blocks)", fig.moving.len())
+    };
     let items: [(&str, ShapeStyle); 5] = [
         (&open_label, red.filled()),
         (&slip_label, orange.filled()),

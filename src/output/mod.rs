@@ -62,6 +62,11 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             json!({"name": scene.blocks[i].name, "displacement": d, "rotation": r})
         })
         .collect();
+    let fallen: Vec<&str> = out
+        .fallen
+        .iter()
+        .map(|&b| scene.blocks[b].name.as_str())
+        .collect();
     let (status, failure, message) = match &out.status {
         Status::Stable => (
             if scene.analysis.kind == AnalysisType::Dynamic {
@@ -70,7 +75,16 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
                 "stable"
             },
             Value::Null,
-            Value::Null,
+            if fallen.is_empty() {
+                Value::Null
+            } else {
+                Value::String(format!(
+                    "stands after {} block(s) fell out: {}{}",
+                    fallen.len(),
+                    fallen[..fallen.len().min(10)].join(", "),
+                    if fallen.len() > 10 { ", ..." } else { "" }
+                ))
+            },
         ),
         Status::Interrupted { time } => (
             "interrupted",
@@ -103,6 +117,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
         },
         "load_factor": out.load_factor,
         "failure": failure,
+        "fallen": fallen,
         "blocks": blocks,
         "stats": {
             "dofs": s.dofs,
@@ -122,6 +137,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "tangent_fallbacks": s.tangent_fallbacks,
             "free_motions": s.free_motions,
             "slope_searches": s.slope_searches,
+            "fallen_blocks": s.fallen_blocks,
             "load_cuts": s.load_cuts,
             "contact_releases": s.contact_releases,
             "impact_cuts": s.impact_cuts,

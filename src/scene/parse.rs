@@ -158,6 +158,7 @@ pub const ANALYSIS_KEYS: &[&str] = &[
     "initial_step",
     "bracket",
     "line_search",
+    "fallout",
     "reuse_across_increments",
     "push_block",
     "push_displacement",
@@ -1057,13 +1058,36 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
                     ));
                 }
             }
-            if analysis.kind == AnalysisType::Dynamic {
-                return Err(err_at(
-                    src.line(at),
-                    "[in_situ]",
-                    "a dynamic analysis does not start from an in-situ stress",
-                    "remove [in_situ], or run the excavation as a static analysis (type = \"static\")",
-                ));
+            // equilibrium with gravity: ∂σxy/∂y = −ρ g_x, ∂σyy/∂y = −ρ g_y in every free
+            // block's material
+            let g = model.gravity;
+            let mut used: Vec<usize> = blocks
+                .iter()
+                .filter(|b| b.support == Support::Free)
+                .map(|b| b.material)
+                .collect();
+            used.sort_unstable();
+            used.dedup();
+            for m in used {
+                let mat = &materials[m];
+                let rho = mat.density();
+                let want = [0.0 - rho * g[1], 0.0 - rho * g[0]];
+                let have = [gradient[1], gradient[2]];
+                let scale = want[0].hypot(want[1]).max(have[0].hypot(have[1]));
+                let off = (have[0] - want[0]).hypot(have[1] - want[1]);
+                if scale > 0.0 && off > 0.01 * scale {
+                    warnings.push(format!(
+                        "{}line {}: [in_situ]: gradient (dσyy/dy, dσxy/dy) = ({}, {}) Pa/m is not in equilibrium with gravity in material '{}' ({}, {} Pa/m): the difference is released over the whole rock mass with the excavation",
+                        file.map(|f| format!("{}:", f.display()))
+                            .unwrap_or_default(),
+                        src.line(at),
+                        have[0],
+                        have[1],
+                        mat.name,
+                        want[0],
+                        want[1]
+                    ));
+                }
             }
             Some(InSitu {
                 stress,
@@ -1585,7 +1609,7 @@ fn parse_analysis(
     }
     // the static driver's switches (read by `analysis::statics::Settings`, which checks
     // them again for scenes built without a file): checked here to name their line
-    for k in ["line_search", "reuse_across_increments"] {
+    for k in ["line_search", "fallout", "reuse_across_increments"] {
         if extra.get(k).is_some_and(|v| v.as_bool().is_none()) {
             return Err(err_at(
                 src.key_line(at, k),

@@ -97,3 +97,22 @@ fn a_toppling_slope_is_not_a_fallout() {
     assert!(blocks.len() > 8, "{blocks:?}");
     assert!(out.fallen.is_empty());
 }
+
+/// The blocks that fell under gravity stay out for the capacity search that follows: the
+/// rock mass without its key blocks has a lateral capacity (measured λ = 0.1486), where
+/// without fallout the analysis stops under gravity.
+#[test]
+fn a_capacity_search_goes_on_without_the_fallen_blocks() {
+    let text = tunnel(true).replace("type = \"static\"", "type = \"capacity\"");
+    let sc = common::scene(&text);
+    let (_, out) = common::solve(&sc);
+    let lambda = out.load_factor.expect("a critical load factor");
+    let fell: Vec<&str> = out
+        .fallen
+        .iter()
+        .map(|&b| sc.blocks[b].name.as_str())
+        .collect();
+    eprintln!("fell out: {fell:?}; λ = {lambda}");
+    assert_eq!(fell.len(), 2, "{fell:?}");
+    assert!(lambda > 0.05 && lambda < 1.0, "λ = {lambda}");
+}

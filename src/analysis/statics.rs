@@ -1993,7 +1993,8 @@ impl<'a> Driver<'a> {
                 }
             }
         }
-        self.pins.clear();
+        // the fallen blocks stay held for the phases and paths that follow
+        self.pins = self.fallen_pins.clone();
         Ok((1.0, None))
     }
 

@@ -906,6 +906,8 @@ pub(super) fn run(
     if push.vertical == Some(0.0) {
         pins.push((f + 1, 0.0));
     }
+    // blocks that fell out before the push (`fallout`) stay held
+    pins.extend(d.fallen_pins.iter().copied());
     d.pins = pins;
     d.held = Held::Nothing;
     let start = [d.committed.u[f], d.committed.u[f + 1]];

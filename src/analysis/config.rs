@@ -65,13 +65,16 @@ impl Committed {
             let n = k.normal;
             let tr = [sxx * n[0] + sxy * n[1], sxy * n[0] + syy * n[1]];
             let a = k.length * thickness;
-            *f = [
-                a * (n[0] * tr[0] + n[1] * tr[1]),
-                a * (-n[1] * tr[0] + n[0] * tr[1]),
-            ];
+            *f = in_contact_frame(n, tr).map(|x| a * x);
         }
         c
     }
+}
+
+/// The components (normal, shear) of `v` in the frame of a contact of unit normal `n`:
+/// (n·v, t·v) with t = (−n_y, n_x).
+fn in_contact_frame(n: Point, v: Point) -> [f64; 2] {
+    [n[0] * v[0] + n[1] * v[1], -n[1] * v[0] + n[0] * v[1]]
 }
 
 /// A trial increment evaluated: positions, stresses, contact forces and the internal force
@@ -307,7 +310,7 @@ pub fn evaluate_reusing(
                 let c = &cur.contacts[k];
                 let r = sub(du[c.node_m as usize], c.at_l(|n| du[n as usize]));
                 let n0 = c.normal;
-                *d = [n0[0] * r[0] + n0[1] * r[1], -n0[1] * r[0] + n0[0] * r[1]];
+                *d = in_contact_frame(n0, r);
                 let h0 = committed.history.get(k).copied().unwrap_or([0.0; 2]);
                 (*f, *st, *h) = law
                     .law(k)

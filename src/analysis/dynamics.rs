@@ -641,7 +641,8 @@ impl<'a> Dynamics<'a> {
 
     /// The initial state: the elastic equilibrium K₀ u₀ = F_static − F_int of gravity and
     /// loads (F_int: the in-situ state's internal forces, zero without one; every contact
-    /// sticking, no strength limit), then the contact forces returned to their strength. Contacts that carry the weight from t = 0 do not bounce (the
+    /// sticking, no strength limit), then the contact forces returned to their strength.
+    /// Contacts that carry the weight from t = 0 do not bounce (the
     /// chatter of stiff contacts started without force), and a block whose friction
     /// cannot hold it starts sliding with the right acceleration. Skipped when K₀ is
     /// singular (a block that touches nothing).

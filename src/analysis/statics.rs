@@ -351,8 +351,8 @@ pub struct Driver<'a> {
     frozen: Vec<Option<Frozen>>,
     /// The blocks that fell out ([`Driver::fall_out`]), in the order they fell.
     fallen: Vec<usize>,
-    /// Per contact: it touches a fallen block, and carries no force.
-    fallen_contact: Vec<bool>,
+    /// The contacts that touch a fallen block, which carry no force.
+    fallen_contacts: Vec<usize>,
     /// The unknowns of the fallen blocks, held where the blocks fell out.
     fallen_pins: Vec<(usize, f64)>,
     /// Configurations of trials no longer needed (at most [`SPARE_MESHES`]), whose memory
@@ -610,7 +610,7 @@ impl<'a> Driver<'a> {
             flips: Vec::new(),
             frozen: Vec::new(),
             fallen: Vec::new(),
-            fallen_contact: vec![false; mesh.contacts.len()],
+            fallen_contacts: Vec::new(),
             fallen_pins: Vec::new(),
             spare: std::sync::Mutex::new(Vec::new()),
         })
@@ -659,16 +659,14 @@ impl<'a> Driver<'a> {
             t.force[k] = fa;
             t.state[k] = fr.state;
         }
-        if !self.fallen.is_empty() {
-            for (k, _) in self.fallen_contact.iter().enumerate().filter(|c| *c.1) {
-                let f = t.force[k];
-                if f != [0.0, 0.0] {
-                    let map = crate::assembly::contact_map(&t.mesh, &t.mesh.contacts[k]);
-                    crate::assembly::add_mapped_force(&map, [-f[0], -f[1]], &mut t.f_int);
-                }
-                t.force[k] = [0.0, 0.0];
-                t.state[k] = ContactState::Open;
+        for &k in &self.fallen_contacts {
+            let f = t.force[k];
+            if f != [0.0, 0.0] {
+                let map = crate::assembly::contact_map(&t.mesh, &t.mesh.contacts[k]);
+                crate::assembly::add_mapped_force(&map, [-f[0], -f[1]], &mut t.f_int);
             }
+            t.force[k] = [0.0, 0.0];
+            t.state[k] = ContactState::Open;
         }
         t
     }
@@ -2013,11 +2011,11 @@ impl<'a> Driver<'a> {
         let mech = super::mechanism::classify(
             self.scene, &self.cur, &f.mode, &f.states, &f.forces, &f.loads,
         );
-        let mut out = vec![false; self.cur.blocks.len()];
+        let mut before = vec![false; self.cur.blocks.len()];
         for &b in &self.fallen {
-            out[b] = true;
+            before[b] = true;
         }
-        let moving: Vec<usize> = mech.moving().into_iter().filter(|&b| !out[b]).collect();
+        let moving: Vec<usize> = mech.moving().into_iter().filter(|&b| !before[b]).collect();
         let free = self
             .cur
             .blocks
@@ -2029,15 +2027,17 @@ impl<'a> Driver<'a> {
             return false;
         }
         let dofs = self.block_dofs();
+        let mut now = vec![false; self.cur.blocks.len()];
         for &b in &moving {
+            now[b] = true;
             self.fallen_pins.extend(dofs[b].iter().map(|&d| (d, 0.0)));
         }
-        for &b in &moving {
-            out[b] = true;
-        }
+        // the contacts of the blocks falling now (those of the blocks fallen before are
+        // in the list already)
         for (k, c) in self.cur.contacts.iter().enumerate() {
-            if out[c.block_l as usize] || out[c.block_m as usize] {
-                self.fallen_contact[k] = true;
+            let (l, m) = (c.block_l as usize, c.block_m as usize);
+            if (now[l] || now[m]) && !before[l] && !before[m] {
+                self.fallen_contacts.push(k);
                 self.committed.force[k] = [0.0, 0.0];
                 self.committed.state[k] = ContactState::Open;
             }

@@ -1071,6 +1071,7 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
             for m in used {
                 let mat = &materials[m];
                 let rho = mat.density();
+                // (0 − x rather than −x: no "-0" in the message)
                 let want = [0.0 - rho * g[1], 0.0 - rho * g[0]];
                 let have = [gradient[1], gradient[2]];
                 let scale = want[0].hypot(want[1]).max(have[0].hypot(have[1]));

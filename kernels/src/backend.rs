@@ -166,6 +166,15 @@ pub trait LinearBackend: Send {
     fn set_partition(&mut self, _part: &[u32]) -> Result<(), SolveError> {
         Ok(())
     }
+    /// The blocks' interiors: `group[i]` is the index of the block whose interior unknown
+    /// i is — an unknown whose stiffness comes from its own block alone, on a node that
+    /// no contact acts on — and `u32::MAX` for every other unknown (contact nodes, rigid
+    /// blocks), one entry per unknown of the matrices to come. A backend that condenses
+    /// the interiors out (`faer-condensed`, [`crate::condensed`]) uses it; the others
+    /// ignore it (the default). Call before `factorize`.
+    fn set_interiors(&mut self, _group: &[u32]) -> Result<(), SolveError> {
+        Ok(())
+    }
 }
 
 /// Whether two value arrays are bit-identical (the skip test of `factorize`, and of
@@ -218,6 +227,7 @@ pub const BACKENDS: &[&str] = &[
     "faer-ldlt",
     "faer-ldlt-metis",
     "faer-lu",
+    "faer-condensed",
     "faer-substructured",
     "pcg",
 ];
@@ -225,7 +235,8 @@ pub const BACKENDS: &[&str] = &[
 /// Builds a backend from its name (one of [`BACKENDS`]) with default settings. The
 /// `-metis` variants order the unknowns by METIS nested dissection instead of AMD;
 /// `faer-substructured` is [`crate::substructure::FaerCholeskySubstructured`] with two
-/// subdomains.
+/// subdomains; `faer-condensed` is [`crate::condensed::FaerCholeskyCondensed`] (the
+/// blocks' interiors condensed out, given [`LinearBackend::set_interiors`]).
 /// The error message lists the valid names.
 pub fn backend_from_name(name: &str) -> Result<Box<dyn LinearBackend>, String> {
     match name {
@@ -239,6 +250,7 @@ pub fn backend_from_name(name: &str) -> Result<Box<dyn LinearBackend>, String> {
             crate::faer_backend::FaerLdlt::new().with_ordering(FillOrdering::Metis),
         )),
         "faer-lu" => Ok(Box::new(crate::faer_backend::FaerLu::new())),
+        "faer-condensed" => Ok(Box::new(crate::condensed::FaerCholeskyCondensed::new())),
         "faer-substructured" => Ok(Box::new(
             crate::substructure::FaerCholeskySubstructured::new(),
         )),

@@ -100,30 +100,9 @@ impl CholAnalysis {
         }
     }
 
-    /// Multiply-adds of a numeric factorization: Σ over the columns of L of m(m + 1)/2,
-    /// m the column's stored entries (the diagonal included).
+    /// Multiply-adds of a numeric factorization ([`symbolic_flops`]).
     pub(crate) fn flops(&self) -> f64 {
-        let col = |m: usize| (m * (m + 1) / 2) as f64;
-        match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => s
-                .col_ptr()
-                .windows(2)
-                .map(|w| col((w[1] - w[0]) as usize))
-                .sum(),
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let begin = s.supernode_begin();
-                let end = s.supernode_end();
-                // the values of supernode k: a (c + p) × c block, p rows below it
-                let vals = s.col_ptr_for_val();
-                (0..s.n_supernodes())
-                    .map(|k| {
-                        let c = (end[k] - begin[k]) as usize;
-                        let p = (vals[k + 1] - vals[k]) as usize / c.max(1) - c;
-                        (0..c).map(|j| col(c - j + p)).sum::<f64>()
-                    })
-                    .sum()
-            }
-        }
+        symbolic_flops(&self.symbolic)
     }
 
     /// Diagonal of the stored factor, in permuted order: L_pp for LLᵀ, D_pp for LDLᵀ.
@@ -185,6 +164,50 @@ fn advise_huge_pages(buf: &mut [f64]) {
             }
         }
     }
+}
+
+/// Multiply-adds of a numeric factorization with the symbolic structure `symbolic`: Σ
+/// over the columns of L of m(m + 1)/2, m the column's stored entries (the diagonal
+/// included).
+pub(crate) fn symbolic_flops(symbolic: &SymbolicCholesky<u32>) -> f64 {
+    let col = |m: usize| (m * (m + 1) / 2) as f64;
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => s
+            .col_ptr()
+            .windows(2)
+            .map(|w| col((w[1] - w[0]) as usize))
+            .sum(),
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let begin = s.supernode_begin();
+            let end = s.supernode_end();
+            // the values of supernode k: a (c + p) × c block, p rows below it
+            let vals = s.col_ptr_for_val();
+            (0..s.n_supernodes())
+                .map(|k| {
+                    let c = (end[k] - begin[k]) as usize;
+                    let p = (vals[k + 1] - vals[k]) as usize / c.max(1) - c;
+                    (0..c).map(|j| col(c - j + p)).sum::<f64>()
+                })
+                .sum()
+        }
+    }
+}
+
+/// [`symbolic_flops`] of the Cholesky factorization of a matrix with the symmetric pattern
+/// `pattern` in faer's AMD order (the default backend's analysis, without allocating the
+/// factor).
+pub(crate) fn cholesky_flops(pattern: &CsrPattern) -> Result<f64, SolveError> {
+    let n = pattern.n();
+    let col_ptr = col_ptr_u32(pattern)?;
+    let sym = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, pattern.col_idx());
+    let symbolic = factorize_symbolic_cholesky(
+        sym,
+        Side::Lower,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams::default(),
+    )
+    .map_err(faer_err)?;
+    Ok(symbolic_flops(&symbolic))
 }
 
 /// Shared implementation of the LLᵀ and LDLᵀ backends.

@@ -9,6 +9,8 @@
 //! * [`lowrank`]: solves with a matrix changed on few unknowns through the held
 //!   Cholesky factor of the old one (Woodbury inside the factor).
 //! * [`split`]: sparse Cholesky on two threads through a METIS vertex bisection.
+//! * [`condensed`]: sparse Cholesky with the blocks' interiors condensed out (static
+//!   condensation), only the changed blocks and the boundary system refactorized.
 //! * [`substructure`]: sparse Cholesky by substructuring, k subdomains in parallel, the
 //!   unchanged ones reused between factorizations.
 //! * [`pcg`]: preconditioned conjugate gradients (Jacobi, block-Jacobi, two-level with a
@@ -21,6 +23,7 @@
 
 pub mod assembly;
 pub mod backend;
+pub mod condensed;
 pub mod csr;
 pub mod faer_backend;
 pub mod lowrank;
@@ -36,6 +39,7 @@ pub use backend::{
     backend_from_name, max_relative_difference, same_bits, LinearBackend, SolveError, SolverStats,
     BACKENDS,
 };
+pub use condensed::{Decision, FaerCholeskyCondensed};
 pub use csr::{CsrMatrix, CsrPattern};
 pub use faer_backend::{FaerCholesky, FaerLdlt, FaerLu};
 pub use lowrank::{LowRankCorrection, LowRankStats};

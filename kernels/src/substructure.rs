@@ -124,9 +124,10 @@ pub struct SubstructureStats {
     pub interface_seconds: f64,
 }
 
-/// A subdomain: Kᵢ and its factor's columns of the interior.
-struct Leaf {
-    half: Half,
+/// A subdomain: Kᵢ and its factor's columns of the interior (also a block's interior in
+/// [`crate::condensed`]).
+pub(crate) struct Leaf {
+    pub(crate) half: Half,
     /// The partial factorization of Kᵢ (interior columns; values in the half's factor).
     partial: PartialLlt,
     /// Local unknown of Kᵢ → its position in the factor's order.
@@ -199,11 +200,11 @@ fn par_of(t: usize) -> Par {
 
 /// What a factorization needs besides the matrix.
 #[derive(Clone, Copy)]
-struct Ctx<'a> {
-    a: &'a CsrMatrix,
-    diag_pos: &'a [usize],
-    leaf_par: Par,
-    front_par: Par,
+pub(crate) struct Ctx<'a> {
+    pub(crate) a: &'a CsrMatrix,
+    pub(crate) diag_pos: &'a [usize],
+    pub(crate) leaf_par: Par,
+    pub(crate) front_par: Par,
 }
 
 impl Node {
@@ -433,16 +434,66 @@ fn front_flops(o: usize, b: usize) -> f64 {
 }
 
 impl Leaf {
+    /// The subdomain of the unknowns `interior` (global, increasing) and the interface
+    /// unknowns `bnd` they couple to (global, increasing): its sub-matrix's symbolic
+    /// analysis (`order` for the interior, `bnd` last) and the plan of its partial
+    /// factorization.
+    pub(crate) fn new(
+        pattern: &Arc<CsrPattern>,
+        interior: Vec<u32>,
+        bnd: &[u32],
+        order: InteriorOrder<'_>,
+        threads: usize,
+    ) -> Result<Self, SolveError> {
+        let half = Half::new(pattern, interior, bnd, order, threads)?;
+        let an = half.core.analysis.as_ref().expect("analyzed");
+        let nl = half.dofs.len();
+        let perm_inv: Vec<u32> = match an.symbolic.perm() {
+            Some(p) => p.arrays().1.to_vec(),
+            None => (0..nl as u32).collect(),
+        };
+        let SymbolicCholeskyRaw::Supernodal(sym) = an.symbolic.raw() else {
+            return Err(SolveError::Other("substructuring: not supernodal".into()));
+        };
+        let kp = &half.values.pattern;
+        let entries = (0..nl).flat_map(|r| {
+            let start = kp.row_ptr()[r];
+            let pi = &perm_inv;
+            kp.row_cols(r)
+                .iter()
+                .enumerate()
+                .map(move |(t, &c)| (pi[r] as usize, pi[c as usize] as usize, start + t))
+        });
+        let partial = PartialLlt::new(sym, half.n_int, entries)?;
+        Ok(Leaf {
+            half,
+            partial,
+            v: vec![0.0; perm_inv.len()],
+            perm_inv,
+            x: Vec::new(),
+            times: (-1.0, -1.0),
+            cpu: 0.0,
+        })
+    }
+
+    /// Stored values of its factor's interior columns.
+    pub(crate) fn partial_values(&self) -> usize {
+        self.partial.n_values()
+    }
+
     /// Multiply-adds of a refactorization: the partial factorization of Kᵢ (its interior
     /// columns, the Schur complement's products included; [`PartialLlt::flops`]).
-    fn flops(&self) -> f64 {
+    pub(crate) fn flops(&self) -> f64 {
         self.partial.flops()
     }
 
     /// Partial factorization of Kᵢ (interior columns) and what its Schur complement
     /// subtracts from the interface, Cᵢ = L_BI L_BIᵀ = A_BᵢIᵢ A_IᵢIᵢ⁻¹ A_IᵢBᵢ (lower, Bᵢ
     /// order), with the smallest interior pivot ratio.
-    fn refactorize(&mut self, cx: Ctx<'_>) -> Result<(Mat<f64>, (f64, usize)), SolveError> {
+    pub(crate) fn refactorize(
+        &mut self,
+        cx: Ctx<'_>,
+    ) -> Result<(Mat<f64>, (f64, usize)), SolveError> {
         let (t, cpu) = (Instant::now(), thread_cpu_seconds());
         self.half.load(cx.a);
         let an = self.half.core.analysis.as_mut().expect("analyzed");
@@ -473,7 +524,7 @@ impl Leaf {
 
     /// Forward solve of the interior with the global right-hand side `b` (zero on Bᵢ);
     /// returns L_BI y in Bᵢ order (the coupling term of the global forward solve).
-    fn forward(&mut self, b: &[f64]) -> Vec<f64> {
+    pub(crate) fn forward(&mut self, b: &[f64]) -> Vec<f64> {
         let h = &self.half;
         self.v.fill(0.0);
         for (&g, &p) in h.dofs[..h.n_int].iter().zip(&self.perm_inv) {
@@ -487,7 +538,7 @@ impl Leaf {
 
     /// Backward solve after [`Leaf::forward`] given the solution `xb` on Bᵢ (Bᵢ order);
     /// returns the interior unknowns in interior order.
-    fn backward(&mut self, xb: &[f64]) -> Vec<f64> {
+    pub(crate) fn backward(&mut self, xb: &[f64]) -> Vec<f64> {
         let h = &self.half;
         for (&p, &x) in h.s_pos.iter().zip(xb) {
             self.v[h.n_int + p] = x;
@@ -684,40 +735,13 @@ fn build(
 ) -> Result<Node, SolveError> {
     match plan {
         Plan::Leaf { interior, bnd } => {
-            let half = Half::new(pattern, interior, &bnd, order, threads)?;
-            let an = half.core.analysis.as_ref().expect("analyzed");
-            let nl = half.dofs.len();
-            let perm_inv: Vec<u32> = match an.symbolic.perm() {
-                Some(p) => p.arrays().1.to_vec(),
-                None => (0..nl as u32).collect(),
-            };
-            let SymbolicCholeskyRaw::Supernodal(sym) = an.symbolic.raw() else {
-                return Err(SolveError::Other("substructuring: not supernodal".into()));
-            };
-            let kp = &half.values.pattern;
-            let entries = (0..nl).flat_map(|r| {
-                let start = kp.row_ptr()[r];
-                let pi = &perm_inv;
-                kp.row_cols(r)
-                    .iter()
-                    .enumerate()
-                    .map(move |(t, &c)| (pi[r] as usize, pi[c as usize] as usize, start + t))
-            });
-            let partial = PartialLlt::new(sym, half.n_int, entries)?;
+            let leaf = Leaf::new(pattern, interior, &bnd, order, threads)?;
             Ok(Node {
                 bnd,
                 c: Mat::zeros(0, 0),
                 factored: false,
                 min_pivot: (f64::INFINITY, 0),
-                kind: Kind::Leaf(Box::new(Leaf {
-                    half,
-                    partial,
-                    v: vec![0.0; perm_inv.len()],
-                    perm_inv,
-                    x: Vec::new(),
-                    times: (-1.0, -1.0),
-                    cpu: 0.0,
-                })),
+                kind: Kind::Leaf(Box::new(leaf)),
             })
         }
         Plan::Front { own, bnd, children } => {

@@ -41,8 +41,10 @@ enum Command {
         /// Worker threads (default: all cores). Results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
-        /// Linear backend: faer-cholesky (default), faer-ldlt, faer-lu, faer-substructured
-        /// (subdomains of blocks factorized in parallel), pcg, ..., and with
+        /// Linear backend: faer-condensed (default: faer's Cholesky with the deformable
+        /// blocks' interiors condensed out where that pays), faer-cholesky, faer-ldlt,
+        /// faer-lu, faer-substructured (subdomains of blocks factorized in parallel), pcg,
+        /// ..., and with
         /// the cargo features of the same name mumps, mumps-spd, mumps-lu, petsc.
         #[arg(long, default_value = solve::DEFAULT)]
         solver: String,

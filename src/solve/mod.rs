@@ -16,8 +16,11 @@ pub struct BackendOptions {
 /// The backend that takes `--subdomains`.
 pub(crate) const SUBSTRUCTURED: &str = "faer-substructured";
 
-/// Default backend: faer's supernodal Cholesky (LLᵀ) with the symbolic phase cached.
-pub const DEFAULT: &str = "faer-cholesky";
+/// Default backend: faer's supernodal Cholesky (LLᵀ) with the symbolic phase cached and
+/// the blocks' interiors condensed out where that pays (`faer-condensed`: from the second
+/// factorization on, when the condensed matrix costs at most half the whole one; else,
+/// and always for rigid blocks, bit for bit `faer-cholesky`).
+pub const DEFAULT: &str = "faer-condensed";
 
 /// Every backend name `--solver` knows: the built-in ones ([`BACKENDS`]) and those of
 /// `dfem-ffi` (MUMPS, PETSc), whether compiled in or not.
@@ -133,6 +136,36 @@ pub fn rigid_body_modes(mesh: &crate::mesh::Mesh) -> Vec<Vec<f64>> {
     modes
 }
 
+/// The blocks' interiors, for [`LinearBackend::set_interiors`]: the index of its block
+/// (in `mesh.blocks`) for every free unknown of a deformable block's node that no contact
+/// acts on (neither of its two points nor the edge that carries its normal), `u32::MAX`
+/// for every other unknown (contact nodes, rigid blocks).
+pub fn interior_groups(mesh: &crate::mesh::Mesh) -> Vec<u32> {
+    use crate::mesh::BlockDofs;
+    let mut on_contact = vec![false; mesh.nodes.len()];
+    for c in &mesh.contacts {
+        for n in [c.node_l, c.node_m, c.edge_l[0], c.edge_l[1]] {
+            on_contact[n as usize] = true;
+        }
+    }
+    let mut group = vec![u32::MAX; mesh.n_dofs];
+    for (b, blk) in mesh.blocks.iter().enumerate() {
+        if let BlockDofs::Deformable = blk.dofs {
+            for node in blk.nodes.clone() {
+                if on_contact[node as usize] {
+                    continue;
+                }
+                for &d in &mesh.node_dofs[node as usize] {
+                    if d != dfem_kernels::CONSTRAINED {
+                        group[d as usize] = b as u32;
+                    }
+                }
+            }
+        }
+    }
+    group
+}
+
 /// The movable blocks partitioned into `parts` subdomains, as the part of every unknown
 /// ([`LinearBackend::set_partition`]): METIS recursive bisection
 /// ([`dfem_kernels::metis_partition_graph`]; parts numbered along the bisections, which
@@ -214,6 +247,7 @@ fn configure_with(
     known: Option<(usize, &[u32])>,
 ) -> Result<(), SolveError> {
     backend.set_near_null_space(&rigid_body_modes(mesh))?;
+    backend.set_interiors(&interior_groups(mesh))?;
     match (backend.partition_parts(), known) {
         (Some(k), Some((parts, part))) if k == parts => backend.set_partition(part)?,
         (Some(k), _) => backend.set_partition(&block_partition(mesh, k)?)?,

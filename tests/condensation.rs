@@ -120,3 +120,16 @@ fn rigid_blocks_are_factorized_whole_bit_for_bit() {
     assert_eq!(whole.u, cond.u);
     assert_eq!(whole.stats.iterations, cond.stats.iterations);
 }
+
+#[test]
+fn check_counts_the_interiors() {
+    let dir = common::tmp_dir("condensation_check");
+    let file = dir.join("column.toml");
+    std::fs::write(&file, dfem::scene::examples::get("column").unwrap()).unwrap();
+    let out = common::dfem_ok(&["check", file.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("interior dofs: 4582 in 6 deformable blocks"),
+        "{text}"
+    );
+}

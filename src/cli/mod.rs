@@ -509,6 +509,19 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             println!("joints: {}", m.segments.len());
             println!("contacts: {}", m.contacts.len());
             println!("dofs: {}", m.n_dofs);
+            let interiors = solve::interior_groups(&m);
+            let interior = interiors.iter().filter(|&&g| g != u32::MAX).count();
+            if interior > 0 {
+                let mut blocks: Vec<u32> =
+                    interiors.into_iter().filter(|&g| g != u32::MAX).collect();
+                blocks.sort_unstable();
+                blocks.dedup();
+                println!(
+                    "interior dofs: {interior} in {} deformable blocks (no contact on their \
+                     nodes; the default solver condenses them out where that pays)",
+                    blocks.len()
+                );
+            }
             let e = crate::resources::estimate(&m);
             println!(
                 "estimated memory of the analysis: {:.0} MB (factor {:.0} MB)",

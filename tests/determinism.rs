@@ -34,7 +34,8 @@ fn summary(dir: &std::path::Path) -> serde_json::Value {
 
 #[test]
 fn one_and_two_threads_give_the_same_bits() {
-    for example in ["wall", "arch", "tunnel"] {
+    // column: deformable drums whose interiors the default solver condenses out
+    for example in ["wall", "arch", "tunnel", "column"] {
         let a = run(example, 1, "t1");
         let b = run(example, 2, "t2");
         let c = run(example, 2, "t2again");

@@ -84,6 +84,9 @@ struct Plan {
     root_map: Vec<(u32, usize)>,
     /// S's values (the matrix handed to the root factorization).
     s: CsrMatrix,
+    /// S for the matrix of a [`LinearBackend::solve_changed`] (S's pattern; allocated at
+    /// the first call).
+    s_changed: Option<CsrMatrix>,
     /// Scratch right-hand side on R.
     rhs_root: Vec<f64>,
     diag_pos: Vec<usize>,
@@ -93,9 +96,10 @@ struct Plan {
 /// alone decides, not the machine): the condensed matrix's factorization — what an
 /// iteration that changes contacts only refactorizes, and what the low-rank corrections
 /// work on — at most this share of the whole matrix's. The interiors' factorizations
-/// come on top only where a block's geometry changed (once an increment). On a 2D wall of bricks with contacts all round, the cliques of the
-/// bricks' boundaries make S cost more than the whole matrix (docs/performance.md,
-/// "Static condensation"), and the backend factorizes the whole matrix instead.
+/// come on top only where a block's geometry changed (once an increment). On a 2D wall
+/// of bricks with contacts all round, the cliques of the bricks' boundaries make S cost
+/// more than the whole matrix (docs/performance.md, "Static condensation"), and the
+/// backend factorizes the whole matrix instead.
 pub const CONDENSE_MAX_SHARE: f64 = 0.5;
 
 /// Below this many multiply-adds of the whole matrix's factorization (about a millisecond)
@@ -122,7 +126,8 @@ pub struct Decision {
 
 /// Sparse Cholesky with the blocks' interiors condensed out (see the module docs).
 pub struct FaerCholeskyCondensed {
-    block_of: Option<Vec<u32>>,
+    /// The interior groups of [`LinearBackend::set_interiors`].
+    groups: Option<Vec<u32>>,
     plan: Option<Plan>,
     /// The whole matrix's factorization, used when the condensation does not pay (or is
     /// not possible): every call then goes to it, bit for bit `faer-cholesky`.
@@ -155,7 +160,7 @@ impl FaerCholeskyCondensed {
     /// thread (`with_threads` to change).
     pub fn new() -> Self {
         Self {
-            block_of: None,
+            groups: None,
             plan: None,
             whole: FaerCholesky::new(),
             use_whole: false,
@@ -217,7 +222,7 @@ impl FaerCholeskyCondensed {
     /// The interiors' analyses are left to [`Self::finish`].
     fn build(&self, pattern: &Arc<CsrPattern>) -> Result<Option<Plan>, SolveError> {
         let n = pattern.n();
-        let block_of: &[u32] = match &self.block_of {
+        let group: &[u32] = match &self.groups {
             Some(b) if b.len() == n => b,
             Some(b) => {
                 return Err(SolveError::Other(format!(
@@ -229,12 +234,12 @@ impl FaerCholeskyCondensed {
         };
         let interior: Vec<bool> = (0..n)
             .map(|i| {
-                let b = block_of[i];
+                let b = group[i];
                 b != u32::MAX
                     && pattern
                         .row_cols(i)
                         .iter()
-                        .all(|&c| matches!(block_of[c as usize], g if g == b || g == u32::MAX))
+                        .all(|&c| matches!(group[c as usize], g if g == b || g == u32::MAX))
             })
             .collect();
         // R and each position in it
@@ -254,7 +259,7 @@ impl FaerCholeskyCondensed {
         let mut group_of_block = std::collections::HashMap::new();
         for i in 0..n {
             if interior[i] {
-                let g = *group_of_block.entry(block_of[i]).or_insert_with(|| {
+                let g = *group_of_block.entry(group[i]).or_insert_with(|| {
                     groups.push(Vec::new());
                     groups.len() - 1
                 });
@@ -336,6 +341,7 @@ impl FaerCholeskyCondensed {
             root_dofs,
             root_map,
             s: CsrMatrix::zeros(s_pattern),
+            s_changed: None,
             rhs_root: vec![0.0; nr],
         }))
     }
@@ -375,17 +381,17 @@ impl FaerCholeskyCondensed {
         Ok(())
     }
 
-    /// S's values for K's values `a` with the interiors' cliques as held.
-    fn fill_s(plan: &mut Plan, a: &[f64]) {
-        plan.s.values.fill(0.0);
+    /// `s` ← S's values for K's values `a`, with the interiors' cliques as held.
+    fn fill_s(plan: &Plan, a: &[f64], s: &mut [f64]) {
+        s.fill(0.0);
         for &(p, t) in &plan.root_map {
-            plan.s.values[p as usize] += a[t];
+            s[p as usize] += a[t];
         }
         for int in &plan.interiors {
             for (&(p, q), &c) in int.scatter.iter().zip(&int.clique) {
-                plan.s.values[p as usize] -= c;
+                s[p as usize] -= c;
                 if q != p {
-                    plan.s.values[q as usize] -= c;
+                    s[q as usize] -= c;
                 }
             }
         }
@@ -484,7 +490,9 @@ impl FaerCholeskyCondensed {
                 best = (r, i);
             }
         }
-        Self::fill_s(plan, &a.values);
+        let mut values = std::mem::take(&mut plan.s.values);
+        Self::fill_s(plan, &a.values, &mut values);
+        plan.s.values = values;
         let root = self.root.factorize(&plan.s);
         self.own.numeric_factorizations += 1;
         self.own.numeric_seconds += t.elapsed().as_secs_f64();
@@ -733,12 +741,15 @@ impl LinearBackend for FaerCholeskyCondensed {
                     "faer-condensed: a block's interior changed (refactorize)".into(),
                 ));
             }
-            let mut s_new = CsrMatrix::zeros(plan.s.pattern.clone());
-            std::mem::swap(&mut plan.s, &mut s_new);
-            Self::fill_s(plan, &a.values);
-            std::mem::swap(&mut plan.s, &mut s_new);
+            let mut s_new = plan
+                .s_changed
+                .take()
+                .unwrap_or_else(|| CsrMatrix::zeros(plan.s.pattern.clone()));
+            Self::fill_s(plan, &a.values, &mut s_new.values);
             Self::forward(plan, rhs);
-            self.root.solve_changed(&s_new, &mut plan.rhs_root)?;
+            let out = self.root.solve_changed(&s_new, &mut plan.rhs_root);
+            plan.s_changed = Some(s_new);
+            out?;
             Self::backward(plan, rhs);
             Ok(())
         })();
@@ -761,7 +772,7 @@ impl LinearBackend for FaerCholeskyCondensed {
     }
 
     fn set_interiors(&mut self, group: &[u32]) -> Result<(), SolveError> {
-        self.block_of = Some(group.to_vec());
+        self.groups = Some(group.to_vec());
         self.plan = None;
         self.use_whole = false;
         self.factored = false;
@@ -809,13 +820,18 @@ mod tests {
             a.add(i, i, 1e-3);
         }
         for &(i, j, k) in &springs {
-            a.add(i, i, k);
-            a.add(j, j, k);
-            a.add(i, j, -k);
-            a.add(j, i, -k);
+            add_spring(&mut a, i, j, k);
         }
-        let block_of = (0..n).map(|i| (i / per) as u32).collect();
-        (a, block_of)
+        let group = (0..n).map(|i| (i / per) as u32).collect();
+        (a, group)
+    }
+
+    /// a += k (eᵢ − eⱼ)(eᵢ − eⱼ)ᵀ: a spring between unknowns i and j.
+    fn add_spring(a: &mut CsrMatrix, i: usize, j: usize, k: f64) {
+        a.add(i, i, k);
+        a.add(j, j, k);
+        a.add(i, j, -k);
+        a.add(j, i, -k);
     }
 
     fn load(n: usize) -> Vec<f64> {
@@ -836,10 +852,10 @@ mod tests {
 
     #[test]
     fn condensed_solve_is_the_whole_matrix_solve() {
-        let (a, block_of) = blocks(3, 7, 5, 0.5);
+        let (a, group) = blocks(3, 7, 5, 0.5);
         let n = a.n();
         let mut c = FaerCholeskyCondensed::new().forced(true);
-        c.set_interiors(&block_of).unwrap();
+        c.set_interiors(&group).unwrap();
         c.factorize(&a).unwrap();
         // interior: every unknown but the coupled edges (5 per edge: 2 edges × 5 + 2 × 5)
         let (int, root) = c.split_sizes().unwrap();
@@ -857,19 +873,15 @@ mod tests {
 
     #[test]
     fn a_contact_change_refactorizes_the_boundary_only_or_corrects_it() {
-        let (a, block_of) = blocks(4, 6, 6, 0.5);
+        let (a, group) = blocks(4, 6, 6, 0.5);
         let n = a.n();
         let mut c = FaerCholeskyCondensed::new().forced(true);
-        c.set_interiors(&block_of).unwrap();
+        c.set_interiors(&group).unwrap();
         c.factorize(&a).unwrap();
         // stiffen one contact spring between blocks 1 and 2 (unknowns 36 + 5 and 72)
         let (i, j) = (36 + 5, 72);
         let mut a2 = a.clone();
-        let dk = 3.0;
-        a2.add(i, i, dk);
-        a2.add(j, j, dk);
-        a2.add(i, j, -dk);
-        a2.add(j, i, -dk);
+        add_spring(&mut a2, i, j, 3.0);
         let b = load(n);
         let want = reference(&a2, &b);
         // a low-rank correction of the held factor of S
@@ -929,12 +941,12 @@ mod tests {
 
     #[test]
     fn an_indefinite_interior_is_reported_at_its_unknown() {
-        let (mut a, block_of) = blocks(2, 4, 4, 1.0);
+        let (mut a, group) = blocks(2, 4, 4, 1.0);
         // unknown 5 is inside block 0
         let d = a.get(5, 5);
         a.add(5, 5, -2.0 * d);
         let mut c = FaerCholeskyCondensed::new().forced(true);
-        c.set_interiors(&block_of).unwrap();
+        c.set_interiors(&group).unwrap();
         match c.factorize(&a) {
             Err(SolveError::NotPositiveDefinite { index, .. }) => assert!(index < 16, "{index}"),
             other => panic!("{other:?}"),
@@ -963,10 +975,7 @@ mod tests {
         assert_eq!(x, y, "bit for bit faer-cholesky before the switch");
         // a contact spring changes: the second factorization is condensed
         let mut a2 = a.clone();
-        a2.add(49, 49, 1.0);
-        a2.add(2500, 2500, 1.0);
-        a2.add(49, 2500, -1.0);
-        a2.add(2500, 49, -1.0);
+        add_spring(&mut a2, 49, 2500, 1.0);
         c.factorize(&a2).unwrap();
         assert!(c.is_condensed());
         assert_eq!(c.split_sizes(), Some((a.n() - 200, 200)));

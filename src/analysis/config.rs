@@ -107,6 +107,22 @@ pub fn secant_local(k: crate::material::ContactSprings, state: ContactState) -> 
     }
 }
 
+/// The tangent local stiffness (N/m) of a contact in a state: the secant one
+/// ([`secant_local`]) but for a slipping contact, whose friction force
+/// Fₛ = ±(cA − Fₙ tan φ) depends on the normal displacement, ∂Fₛ/∂δₙ = ∓ tan φ kₙ (the sign
+/// of `shear`, the contact's shear force in N). Unsymmetric where a contact slips.
+pub fn tangent_local(
+    k: crate::material::ContactSprings,
+    state: ContactState,
+    shear: f64,
+    tan_phi: f64,
+) -> [[f64; 2]; 2] {
+    match state {
+        ContactState::Slip => [[k.kn, 0.0], [-shear.signum() * tan_phi * k.kn, 0.0]],
+        s => secant_local(k, s),
+    }
+}
+
 /// Move the configuration `cur` by the increment `dq` (unknowns) and `presc` (prescribed
 /// translation of each fixed block, m): exact rotation for rigid blocks. Returns the moved
 /// configuration and every node's displacement increment (m), computed directly rather
@@ -340,6 +356,50 @@ pub fn evaluate_reusing(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The tangent of every state is the law's derivative: a central difference of the
+    /// Mohr–Coulomb return map (`ContactLaw::update`) from states well inside each regime,
+    /// slipping either way, with cohesion (the friction's dependence on the normal
+    /// displacement is −sign(Fₛ) tan φ kₙ), sticking and open.
+    #[test]
+    fn tangent_local_is_the_derivative_of_the_law() {
+        use crate::material::{ContactLaw, ElasticBand, MohrCoulomb};
+        let law = MohrCoulomb {
+            elastic: ElasticBand {
+                normal_modulus: 1e9,
+                shear_modulus: 4e8,
+                band: 0.01,
+            },
+            tan_phi: 0.6,
+            cohesion: 2e4,
+            tensile_strength: 1e4,
+        };
+        let area = 0.05;
+        let k = law.springs(area);
+        let committed = [-2e4, 3e3];
+        // (Δδₙ, Δδₛ) in m: slip forward, slip backward, stick, open
+        for d in [[-1e-6, 4e-5], [-1e-6, -4e-5], [-1e-6, 1e-7], [2e-4, 0.0]] {
+            let (f, state) = law.update(area, committed, d);
+            let t = tangent_local(k, state, f[1], law.tan_phi);
+            let h = 1e-10;
+            for j in 0..2 {
+                let (mut a, mut b) = (d, d);
+                a[j] += h;
+                b[j] -= h;
+                let (fa, sa) = law.update(area, committed, a);
+                let (fb, sb) = law.update(area, committed, b);
+                assert_eq!((sa, sb), (state, state), "{d:?} stays in its regime");
+                for i in 0..2 {
+                    let fd = (fa[i] - fb[i]) / (2.0 * h);
+                    assert!(
+                        (fd - t[i][j]).abs() <= 1e-6 * k.kn,
+                        "{state:?} {d:?}: ∂F{i}/∂δ{j} = {fd:e} by differences, tangent {:e}",
+                        t[i][j]
+                    );
+                }
+            }
+        }
+    }
 
     /// Unknowns (m, rad) that differ from unknown to unknown: `scale` × a fixed pattern.
     fn pattern(n: usize, scale: f64) -> Vec<f64> {

@@ -51,7 +51,7 @@
 //! [`Dynamics::retopologize`] — the seam left for large motions with new contacts.
 
 use super::checkpoint::Checkpoint;
-use super::config::{evaluate, secant_local, Committed, Trial};
+use super::config::{evaluate, secant_local, tangent_local, Committed, Trial};
 use super::contact_search;
 use super::{fit_motion, Outcome, Stats, Status};
 use crate::assembly::{loads, mass, LocalStiffness, System};
@@ -83,6 +83,9 @@ pub const KEYS: &[&str] = &[
 /// Open/closed changes of a contact within a step after which its normal spring stays
 /// in the matrix (see [`Dynamics::step`]).
 const FLIPS_BEFORE_ELASTIC: u32 = 2;
+/// GMRES iterations of a tangent step preconditioned with the step's secant
+/// factorization ([`Dynamics::step`]) after which the secant step is taken instead.
+const TANGENT_MAX_ITERATIONS: usize = 30;
 /// Factor on that spring per iteration the contact stays open.
 const OPEN_WEIGHT_DECAY: f64 = 0.1;
 /// Default halvings of a time step before the run is declared failed: impacts in a
@@ -358,6 +361,8 @@ pub struct Dynamics<'a> {
     iota: [Vec<f64>; 2],
     f_static: Vec<f64>,
     kbuf: CsrMatrix,
+    /// The tangent effective matrix of [`Dynamics::step`] (allocated at its first use).
+    tbuf: Option<CsrMatrix>,
     cbuf: Option<CsrMatrix>,
     diag: Vec<usize>,
     /// Dₑ⁻¹ (1/Pa) of each triangle's material (elastic energy).
@@ -534,6 +539,7 @@ impl<'a> Dynamics<'a> {
             settings,
             diag: pattern.diagonal_positions(),
             kbuf: CsrMatrix::zeros(pattern),
+            tbuf: None,
             cbuf,
             system,
             law,
@@ -786,6 +792,7 @@ impl<'a> Dynamics<'a> {
         let pattern = self.system.plan.pattern().clone();
         self.diag = pattern.diagonal_positions();
         self.kbuf = CsrMatrix::zeros(pattern.clone());
+        self.tbuf = None;
         if self.cbuf.is_some() {
             self.cbuf = Some(CsrMatrix::zeros(pattern));
         }
@@ -1016,7 +1023,6 @@ impl<'a> Dynamics<'a> {
         } else {
             (0.0, 0.0, 1.0, 1.0)
         };
-        let [ra0, ra1] = self.settings.rayleigh;
         let n = self.cur.n_dofs;
         let t0 = self.time;
         let (g0, g1) = (self.ground(t0), self.ground(t0 + h));
@@ -1043,7 +1049,6 @@ impl<'a> Dynamics<'a> {
             ([0.0; 2], [0.0; 2])
         };
         let c0 = if inertia { 1.0 / (beta * h * h) } else { 0.0 };
-        let c1 = gamma / (beta * h);
         let terms = StepTerms {
             am,
             af,
@@ -1168,7 +1173,9 @@ impl<'a> Dynamics<'a> {
             } else {
                 &trial.state
             };
-            let local: Vec<LocalStiffness> = (0..self.springs.len())
+            // the contacts' local stiffness in the matrix: secant, but for the anti-chatter
+            // rules above
+            let secant: Vec<LocalStiffness> = (0..self.springs.len())
                 .map(|k| {
                     if frozen[k] {
                         return [[0.0; 2]; 2];
@@ -1183,23 +1190,17 @@ impl<'a> Dynamics<'a> {
                     l
                 })
                 .collect();
-            self.system
-                .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
-            // effective matrix (1−α_m) c₀ M + (1−α_f) c₁ C + (1−α_f) K_s, C of the trial
-            // states (assembled by `balance` for this trial)
-            let kf = (1.0 - af) * (1.0 + c1 * ra1);
-            let mf = (1.0 - am) * c0 + (1.0 - af) * c1 * ra0;
-            match &self.cbuf {
-                Some(c) => {
-                    for (k, cv) in self.kbuf.values.iter_mut().zip(&c.values) {
-                        *k = kf * *k + (1.0 - af) * c1 * cv;
-                    }
-                }
-                None => self.kbuf.values.iter_mut().for_each(|k| *k *= kf),
-            }
-            for (i, &p) in self.diag.iter().enumerate() {
-                self.kbuf.values[p] += mf * self.mass[i];
-            }
+            // once no contact changes state, the step's problem is smooth but for the
+            // slipping contacts' friction, which depends on their normal force: the secant
+            // matrix leaves that out (and keeps kₛ on contacts that flipped between stick
+            // and slip), so its iterations contract by a constant factor (0.79 on the
+            // rocking drums of docs/performance.md, "Tangent steps in the dynamic driver");
+            // a tangent step closes them in one or two
+            let tangent = it > 1
+                && !changed
+                && (0..trial.state.len())
+                    .any(|k| !frozen[k] && trial.state[k] == ContactState::Slip);
+            self.effective_into(&trial.mesh, &secant, &terms, false);
             let mut x = bal.r.clone();
             let ok = self.backend.factorize(&self.kbuf).is_ok()
                 && self.backend.solve(&mut x).is_ok()
@@ -1207,42 +1208,21 @@ impl<'a> Dynamics<'a> {
             if !ok {
                 return Ok(None);
             }
-            // backtracking on the out-of-balance norm: where the full step overshoots
-            // (a contact cycling between its open and closed linearizations, each of
-            // which carries the iterate past the kink of the law), a shorter one lands
-            // near the kink; the best of the tried steps is taken
-            let mut best: Option<(Vec<f64>, Trial, Balance)> = None;
-            // whether the best candidate is the last one evaluated (its C is in `cbuf`)
-            let mut best_is_last = false;
-            let mut alpha = 1.0;
-            for _ in 0..LINE_SEARCH_STEPS {
-                let cand: Vec<f64> = dq.iter().zip(&x).map(|(d, x)| d + alpha * x).collect();
-                let dmax = cand.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                if !dmax.is_finite() || dmax > 0.5 * size {
-                    if best.is_none() {
-                        return Ok(None);
-                    }
-                    break;
-                }
-                let mut t = self.trial_moving(&cand, dug);
-                hold_open(&mut t, &frozen);
-                let b = self.balance(&terms, &cand, &t);
-                let decreased = b.rn <= bal.rn;
-                best_is_last = best.as_ref().is_none_or(|(_, _, bb)| b.rn < bb.rn);
-                if best_is_last {
-                    best = Some((cand, t, b));
-                }
-                // the first iteration's residual is that of the committed state, before
-                // any inertia: its full step is the linearized step, always taken
-                if decreased || it == 0 {
-                    break;
-                }
-                alpha *= 0.5;
-            }
-            let (cand, t, b) = best.expect("the full step is tried");
+            // the tangent step where it lowers the out-of-balance force; else the secant step
+            let tangent_step = match tangent {
+                true => self
+                    .tangent_step(&trial, &secant, &frozen, &terms, &dq, &bal, it, dug, size)
+                    .filter(|s| s.2.rn < bal.rn),
+                false => None,
+            };
+            let found =
+                tangent_step.or_else(|| self.search(&terms, &dq, &x, &bal, it, &frozen, dug, size));
+            let Some((cand, t, b, last)) = found else {
+                return Ok(None);
+            };
             dq = cand;
             trial = t;
-            bal = if best_is_last {
+            bal = if last {
                 b
             } else {
                 // `cbuf` holds C of the last candidate tried: assemble it for the one kept
@@ -1250,6 +1230,146 @@ impl<'a> Dynamics<'a> {
             };
         }
         Ok(None)
+    }
+
+    /// The tangent step of [`Dynamics::step`] from `dq` and the line search along it: the
+    /// effective matrix with the contacts' tangent stiffness in the trial's states (the
+    /// slipping contacts' friction–normal coupling, [`tangent_local`]; the normal springs
+    /// of `secant`, which carry the anti-chatter weights), solved by GMRES preconditioned
+    /// with the backend's factorization of the secant effective matrix (an inexact Newton
+    /// step, to a tenth of the tolerance, as the static driver's). `None` when GMRES does
+    /// not converge within [`TANGENT_MAX_ITERATIONS`] or the step leaves the model.
+    #[allow(clippy::too_many_arguments)]
+    fn tangent_step(
+        &mut self,
+        trial: &Trial,
+        secant: &[LocalStiffness],
+        frozen: &[bool],
+        terms: &StepTerms,
+        dq: &[f64],
+        bal: &Balance,
+        it: usize,
+        dug: [f64; 2],
+        size: f64,
+    ) -> Option<(Vec<f64>, Trial, Balance, bool)> {
+        let local: Vec<LocalStiffness> = (0..secant.len())
+            .map(|k| match frozen[k] {
+                true => secant[k],
+                false => {
+                    let mut l = tangent_local(
+                        self.springs[k],
+                        trial.state[k],
+                        trial.force[k][1],
+                        self.law.tan_phi,
+                    );
+                    l[0][0] = secant[k][0][0];
+                    l
+                }
+            })
+            .collect();
+        self.effective_into(&trial.mesh, &local, terms, true);
+        let tolerance =
+            (0.1 * self.settings.tolerance * bal.scale / bal.rn.max(1e-300)).clamp(1e-10, 1e-3);
+        let out = crate::solve::reuse::gmres_with_factor(
+            self.tbuf.as_ref().expect("assembled above"),
+            &mut *self.backend,
+            &bal.r,
+            tolerance,
+            TANGENT_MAX_ITERATIONS,
+        )?;
+        self.stats.reused_factorizations += 1;
+        self.stats.reuse_iterations += out.iterations;
+        let step = self.search(terms, dq, &out.x, bal, it, frozen, dug, size);
+        if super::tracing() {
+            eprintln!(
+                "  tangent step: GMRES {} iterations, ratio {:.3}",
+                out.iterations,
+                step.as_ref().map_or(f64::NAN, |s| s.2.rn / bal.rn)
+            );
+        }
+        step
+    }
+
+    /// The step's effective matrix (1−α_m) c₀ M + (1−α_f) c₁ C + (1−α_f) K for the
+    /// contacts' local stiffnesses `local` on `mesh` (K with its Rayleigh damping,
+    /// (1−α_f) c₁ a₁ K), C of the trial states (assembled by `balance` for this trial),
+    /// into `kbuf`, or into `tbuf` when `second` (the tangent's).
+    fn effective_into(
+        &mut self,
+        mesh: &Mesh,
+        local: &[LocalStiffness],
+        terms: &StepTerms,
+        second: bool,
+    ) {
+        let [ra0, ra1] = self.settings.rayleigh;
+        let StepTerms { am, af, c0, .. } = *terms;
+        let c1 = terms.gamma / (terms.beta * terms.h);
+        let out = if second {
+            self.tbuf
+                .get_or_insert_with(|| CsrMatrix::zeros(self.kbuf.pattern.clone()))
+        } else {
+            &mut self.kbuf
+        };
+        self.system.stiffness_into(mesh, local, out);
+        let kf = (1.0 - af) * (1.0 + c1 * ra1);
+        let mf = (1.0 - am) * c0 + (1.0 - af) * c1 * ra0;
+        match &self.cbuf {
+            Some(c) => {
+                for (k, cv) in out.values.iter_mut().zip(&c.values) {
+                    *k = kf * *k + (1.0 - af) * c1 * cv;
+                }
+            }
+            None => out.values.iter_mut().for_each(|k| *k *= kf),
+        }
+        for (i, &p) in self.diag.iter().enumerate() {
+            out.values[p] += mf * self.mass[i];
+        }
+    }
+
+    /// Backtracking along the correction `x` from `dq` on the out-of-balance norm: where
+    /// the full step overshoots (a contact cycling between its open and closed
+    /// linearizations, each of which carries the iterate past the kink of the law), a
+    /// shorter one lands near the kink. Returns the best of the tried steps: its unknowns,
+    /// trial and balance, and whether it was the last one evaluated (then `cbuf` holds its
+    /// C); `None` when even the full step leaves the model (a step larger than half its
+    /// size, `size` in m, or not finite).
+    #[allow(clippy::too_many_arguments)]
+    fn search(
+        &mut self,
+        terms: &StepTerms,
+        dq: &[f64],
+        x: &[f64],
+        bal: &Balance,
+        it: usize,
+        frozen: &[bool],
+        dug: [f64; 2],
+        size: f64,
+    ) -> Option<(Vec<f64>, Trial, Balance, bool)> {
+        let mut best: Option<(Vec<f64>, Trial, Balance)> = None;
+        let mut best_is_last = false;
+        let mut alpha = 1.0;
+        for _ in 0..LINE_SEARCH_STEPS {
+            let cand: Vec<f64> = dq.iter().zip(x).map(|(d, x)| d + alpha * x).collect();
+            let dmax = cand.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if !dmax.is_finite() || dmax > 0.5 * size {
+                break;
+            }
+            let mut t = self.trial_moving(&cand, dug);
+            hold_open(&mut t, frozen);
+            let b = self.balance(terms, &cand, &t);
+            let decreased = b.rn <= bal.rn;
+            best_is_last = best.as_ref().is_none_or(|(_, _, bb)| b.rn < bb.rn);
+            if best_is_last {
+                best = Some((cand, t, b));
+            }
+            // the first iteration's residual is that of the committed state, before any
+            // inertia: its full step is the linearized step, always taken
+            if decreased || it == 0 {
+                break;
+            }
+            alpha *= 0.5;
+        }
+        best.map(|(c, t, b)| (c, t, b, best_is_last))
     }
 
     /// Elastic energy (J) of a state: blocks ½ ∫ σᵀ Dₑ⁻¹ σ, contacts ½ (Fₙ²/kₙ + Fₛ²/kₛ).

@@ -49,7 +49,8 @@ pub struct Stats {
     pub contact_topologies: usize,
     /// Corrections solved with an earlier factorization as preconditioner instead of a
     /// refactorization: secant ones (few contacts changed state) by conjugate gradients,
-    /// tangent ones of the secant strategy by GMRES on the secant factorization.
+    /// tangent ones of the secant strategy by GMRES on the secant factorization, and the
+    /// dynamic driver's tangent steps (GMRES on the step's secant factorization).
     pub reused_factorizations: usize,
     /// Conjugate-gradient and GMRES iterations of those corrections.
     pub reuse_iterations: usize,

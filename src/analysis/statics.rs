@@ -6,7 +6,7 @@
 //! capacity analysis brackets the critical load factor between the last converged and
 //! the first failed increment.
 
-use super::config::{evaluate, Committed, Trial};
+use super::config::{evaluate, secant_local, tangent_local, Committed, Trial};
 use super::mechanism::{classify, Mechanism};
 use super::progress::{Increment, Progress};
 use super::{Outcome, Stats, Status};
@@ -710,15 +710,10 @@ impl<'a> Driver<'a> {
                     // iterations contract to the state at the kink instead of cycling
                     return [[s.kn, 0.0], [0.0, s.ks]];
                 }
-                match states[k] {
-                    ContactState::Stick => [[s.kn, 0.0], [0.0, s.ks]],
-                    ContactState::Open => [[0.0, 0.0], [0.0, 0.0]],
-                    ContactState::Slip if newton => {
-                        // Fₛ = ±(cA − Fₙ tan φ): ∂Fₛ/∂δₙ = ∓ tan φ kₙ
-                        let sg = force[k][1].signum();
-                        [[s.kn, 0.0], [-sg * law.tan_phi() * s.kn, 0.0]]
-                    }
-                    ContactState::Slip => [[s.kn, 0.0], [0.0, 0.0]],
+                if newton {
+                    tangent_local(s, states[k], force[k][1], law.tan_phi())
+                } else {
+                    secant_local(s, states[k])
                 }
             })
             .collect()

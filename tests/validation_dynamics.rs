@@ -827,11 +827,11 @@ initial = "rest"
 /// φ = 35°) under a 0.15 g, 5 Hz sine for 0.3 s: its joints open and close, and the
 /// contacts on either side of each rocking joint slip, with friction forces that follow
 /// their normal forces. The secant iteration alone contracts there by a constant factor
-/// (0.79 a step over 60 iterations at t = 0.14 s): 3,236 iterations for 74 steps and cuts
-/// (44 a step) on f3b80a7. The dynamic driver's tangent steps (docs/theory.md §5, by GMRES
-/// on the secant factorization) close such steps in two once the states settle: 1,670
-/// iterations for 67 (25 a step). The bound of 32 a step fails without them; that the
-/// tangent is the law's derivative is checked in `analysis::config`'s unit tests.
+/// (0.79 an iteration over 46 iterations at t = 0.14 s): 3,236 iterations for 74 steps and
+/// cuts (44 a step) on f3b80a7. The dynamic driver's tangent steps (docs/theory.md §5, by
+/// GMRES on the secant factorization) close such steps in two once the states settle:
+/// 1,804 iterations for 67 (27 a step). The bound of 32 a step fails without them; that
+/// the tangent is the law's derivative is checked in `analysis::config`'s unit tests.
 #[test]
 fn rocking_drums_converge_with_tangent_steps() {
     let text = dfem::scene::examples::drum_column(

@@ -846,6 +846,15 @@ mod tests {
         x
     }
 
+    /// The backend with the condensation forced, given the interiors `group` and
+    /// factorized on `a`.
+    fn factorized_condensed(a: &CsrMatrix, group: &[u32]) -> FaerCholeskyCondensed {
+        let mut c = FaerCholeskyCondensed::new().forced(true);
+        c.set_interiors(group).unwrap();
+        c.factorize(a).unwrap();
+        c
+    }
+
     fn close(x: &[f64], y: &[f64]) -> f64 {
         crate::backend::max_relative_difference(x, y)
     }
@@ -854,9 +863,7 @@ mod tests {
     fn condensed_solve_is_the_whole_matrix_solve() {
         let (a, group) = blocks(3, 7, 5, 0.5);
         let n = a.n();
-        let mut c = FaerCholeskyCondensed::new().forced(true);
-        c.set_interiors(&group).unwrap();
-        c.factorize(&a).unwrap();
+        let mut c = factorized_condensed(&a, &group);
         // interior: every unknown but the coupled edges (5 per edge: 2 edges × 5 + 2 × 5)
         let (int, root) = c.split_sizes().unwrap();
         assert_eq!((int, root), (n - 20, 20));
@@ -875,9 +882,7 @@ mod tests {
     fn a_contact_change_refactorizes_the_boundary_only_or_corrects_it() {
         let (a, group) = blocks(4, 6, 6, 0.5);
         let n = a.n();
-        let mut c = FaerCholeskyCondensed::new().forced(true);
-        c.set_interiors(&group).unwrap();
-        c.factorize(&a).unwrap();
+        let mut c = factorized_condensed(&a, &group);
         // stiffen one contact spring between blocks 1 and 2 (unknowns 36 + 5 and 72)
         let (i, j) = (36 + 5, 72);
         let mut a2 = a.clone();

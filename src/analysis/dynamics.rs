@@ -1218,11 +1218,7 @@ impl<'a> Dynamics<'a> {
                     .any(|k| !frozen[k] && trial.state[k] == ContactState::Slip);
             last_rn = bal.rn;
             self.effective_into(&trial.mesh, &secant, &terms, false);
-            let mut x = bal.r.clone();
-            let ok = self.backend.factorize(&self.kbuf).is_ok()
-                && self.backend.solve(&mut x).is_ok()
-                && x.iter().all(|v| v.is_finite());
-            if !ok {
+            if self.backend.factorize(&self.kbuf).is_err() {
                 return Ok(None);
             }
             // the tangent step where it lowers the out-of-balance force; else the secant step
@@ -1233,8 +1229,16 @@ impl<'a> Dynamics<'a> {
                 false => None,
             };
             last_tangent = tangent_step.is_some();
-            let found =
-                tangent_step.or_else(|| self.search(&terms, &dq, &x, &bal, it, &frozen, dug, size));
+            let found = match tangent_step {
+                Some(step) => Some(step),
+                None => {
+                    let mut x = bal.r.clone();
+                    if self.backend.solve(&mut x).is_err() || !x.iter().all(|v| v.is_finite()) {
+                        return Ok(None);
+                    }
+                    self.search(&terms, &dq, &x, &bal, it, &frozen, dug, size)
+                }
+            };
             let Some((cand, t, b, last)) = found else {
                 return Ok(None);
             };

@@ -509,11 +509,12 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             println!("joints: {}", m.segments.len());
             println!("contacts: {}", m.contacts.len());
             println!("dofs: {}", m.n_dofs);
-            let interiors = solve::interior_groups(&m);
-            let interior = interiors.iter().filter(|&&g| g != u32::MAX).count();
+            let mut blocks: Vec<u32> = solve::interior_groups(&m)
+                .into_iter()
+                .filter(|&g| g != u32::MAX)
+                .collect();
+            let interior = blocks.len();
             if interior > 0 {
-                let mut blocks: Vec<u32> =
-                    interiors.into_iter().filter(|&g| g != u32::MAX).collect();
                 blocks.sort_unstable();
                 blocks.dedup();
                 println!(

@@ -830,8 +830,11 @@ initial = "rest"
 /// (0.79 an iteration over 46 iterations at t = 0.14 s): 3,236 iterations for 74 steps and
 /// cuts (44 a step) on f3b80a7. The dynamic driver's tangent steps (docs/theory.md §5, by
 /// GMRES on the secant factorization) close such steps in two once the states settle:
-/// 1,804 iterations for 67 (27 a step). The bound of 32 a step fails without them; that
-/// the tangent is the law's derivative is checked in `analysis::config`'s unit tests.
+/// 1,804 iterations for 67 (27 a step). Its tries that stall at an impact (the
+/// out-of-balance force not below half its best for 20 iterations) are given up and
+/// the step cut then, not after 100 iterations: 1,519 iterations for 68 (22 a step). The
+/// bound of 25 a step fails without either; that the tangent is the law's derivative is
+/// checked in `analysis::config`'s unit tests.
 #[test]
 fn rocking_drums_converge_with_tangent_steps() {
     let text = dfem::scene::examples::drum_column(
@@ -845,11 +848,12 @@ fn rocking_drums_converge_with_tangent_steps() {
     let s = &out.stats;
     let per_step = s.iterations as f64 / s.increments as f64;
     eprintln!(
-        "rocking drums: {} iterations for {} steps ({per_step:.1} a step), {} tangent steps by GMRES ({} iterations)",
-        s.iterations, s.increments, s.reused_factorizations, s.reuse_iterations
+        "rocking drums: {} iterations for {} steps ({per_step:.1} a step), {} tangent steps by GMRES ({} iterations), {} stalled tries",
+        s.iterations, s.increments, s.reused_factorizations, s.reuse_iterations, s.stalled_steps
     );
     assert!(s.reused_factorizations > 0, "no tangent step taken");
-    assert!(per_step < 32.0, "{per_step} iterations a step");
+    assert!(s.stalled_steps > 0, "no stalled try given up");
+    assert!(per_step < 25.0, "{per_step} iterations a step");
     // the drums rock: joints open (the column does not slide off its base)
     let open = col(out.history.as_ref().unwrap(), "open_contacts");
     assert!(open.iter().any(|&n| n > 0.0));

@@ -98,6 +98,9 @@ pub struct Stats {
     /// Contacts of a dynamic run held open for the rest of a time step after cycling
     /// between open and closed in its iterations.
     pub held_open: usize,
+    /// Tries of a dynamic time step given up and cut after the dynamic driver's
+    /// `STALL_ITERATIONS` (20) iterations without progress (before `max_iterations`).
+    pub stalled_steps: usize,
     /// Converged time steps cut because their local error exceeded
     /// `adaptive_tolerance`.
     pub error_cuts: usize,

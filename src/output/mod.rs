@@ -142,6 +142,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "contact_releases": s.contact_releases,
             "impact_cuts": s.impact_cuts,
             "held_open": s.held_open,
+            "stalled_steps": s.stalled_steps,
             "error_cuts": s.error_cuts,
             "min_pivot_ratio": s.min_pivot_ratio,
             "factor_nnz": s.factor_nnz,

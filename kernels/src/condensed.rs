@@ -147,6 +147,9 @@ pub struct FaerCholeskyCondensed {
     factored: bool,
     threads: usize,
     stats: SolverStats,
+    /// Partial factorizations of single interiors done so far (an interior whose rows
+    /// did not change since its last one is not refactorized).
+    interior_factorizations: usize,
 }
 
 impl Default for FaerCholeskyCondensed {
@@ -172,6 +175,7 @@ impl FaerCholeskyCondensed {
             last: Vec::new(),
             factored: false,
             threads: 1,
+            interior_factorizations: 0,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
                 last_true_residual: f64::NAN,
@@ -199,6 +203,12 @@ impl FaerCholeskyCondensed {
     /// (or no interiors were handed over).
     pub fn decision(&self) -> Option<Decision> {
         self.decision
+    }
+
+    /// Partial factorizations of single block interiors done so far: a factorization of
+    /// the condensed form redoes only the interiors whose rows changed.
+    pub fn interior_factorizations(&self) -> usize {
+        self.interior_factorizations
     }
 
     /// Whether the interiors are condensed out now (`false`: the whole matrix is
@@ -462,12 +472,12 @@ impl FaerCholeskyCondensed {
         };
         // the interiors whose rows changed, in parallel; the first failed pivot in block
         // order is reported
-        let redone: Vec<Result<(), SolveError>> = plan
+        let redone: Vec<Result<bool, SolveError>> = plan
             .interiors
             .par_iter_mut()
             .map(|int| {
                 if int.factored && int.leaf.half.interior_unchanged(a) {
-                    return Ok(());
+                    return Ok(false);
                 }
                 int.factored = false;
                 let (c, piv) = int.leaf.refactorize(cx)?;
@@ -480,10 +490,11 @@ impl FaerCholeskyCondensed {
                 }
                 int.pivot = piv;
                 int.factored = true;
-                Ok(())
+                Ok(true)
             })
             .collect();
-        redone.into_iter().collect::<Result<(), _>>()?;
+        let redone = redone.into_iter().collect::<Result<Vec<bool>, _>>()?;
+        self.interior_factorizations += redone.iter().filter(|&&r| r).count();
         let mut best = (f64::INFINITY, 0usize);
         for &(r, i) in plan.interiors.iter().map(|int| &int.pivot) {
             if r < best.0 || r.is_nan() && !best.0.is_nan() {

@@ -108,6 +108,13 @@ const TANGENT_SLOW: f64 = 0.5;
 const STALL_ITERATIONS: usize = 20;
 /// See [`STALL_ITERATIONS`].
 const STALL_PROGRESS: f64 = 0.5;
+/// Largest turn (rad) of a deformable block within a step for which its triangles stay
+/// on the step's start geometry in the iteration matrix ([`Dynamics::effective_into`]):
+/// the rocking drums of the `column` example turn by at most 4·10⁻⁴ rad in a step of
+/// 5 ms, the voussoirs of the seed's arch by up to 10⁻² rad a step as they fall, where a
+/// matrix on the start geometry slowed the iterations (tries of 12 iterations and more:
+/// 870 against 56 under Acc. No. 1).
+const START_GEOMETRY_TURN: f64 = 1e-3;
 /// Factor on that spring per iteration the contact stays open.
 const OPEN_WEIGHT_DECAY: f64 = 0.1;
 /// Default halvings of a time step before the run is declared failed: impacts in a
@@ -385,7 +392,11 @@ pub struct Dynamics<'a> {
     kbuf: CsrMatrix,
     /// The tangent effective matrix of [`Dynamics::step`] (allocated at its first use).
     tbuf: Option<CsrMatrix>,
+    /// C of the last trial balanced, on its geometry (the viscous force C v₁).
     cbuf: Option<CsrMatrix>,
+    /// C on the step's start geometry, in the states of the matrix being built
+    /// ([`Dynamics::effective_into`]).
+    cmat: Option<CsrMatrix>,
     diag: Vec<usize>,
     /// Dₑ⁻¹ (1/Pa) of each triangle's material (elastic energy).
     compliance: Vec<[[f64; 3]; 3]>,
@@ -506,6 +517,50 @@ struct Accepted {
     frozen: Vec<bool>,
 }
 
+/// How far each deformable block of `to` turned from `from` (the same mesh at other node
+/// positions): the largest distance of a node's displacement from the block's mean one
+/// over the largest distance of a node of `from` from their mean (rad for a rigid turn;
+/// a strain for a deformation). Other blocks: 0.
+fn turns(from: &Mesh, to: &Mesh) -> Vec<f64> {
+    from.blocks
+        .iter()
+        .map(|b| {
+            if b.dofs != BlockDofs::Deformable || b.nodes.is_empty() {
+                return 0.0;
+            }
+            let ids = b.nodes.start as usize..b.nodes.end as usize;
+            let d: Vec<Point> = ids
+                .clone()
+                .map(|i| {
+                    [
+                        to.nodes[i][0] - from.nodes[i][0],
+                        to.nodes[i][1] - from.nodes[i][1],
+                    ]
+                })
+                .collect();
+            let k = d.len() as f64;
+            let m = d
+                .iter()
+                .fold([0.0, 0.0], |m, v| [m[0] + v[0] / k, m[1] + v[1] / k]);
+            let spread = d
+                .iter()
+                .map(|v| (v[0] - m[0]).hypot(v[1] - m[1]))
+                .fold(0.0, f64::max);
+            let c = ids.clone().fold([0.0, 0.0], |c, i| {
+                [c[0] + from.nodes[i][0] / k, c[1] + from.nodes[i][1] / k]
+            });
+            let radius = ids
+                .map(|i| (from.nodes[i][0] - c[0]).hypot(from.nodes[i][1] - c[1]))
+                .fold(0.0, f64::max);
+            if radius > 0.0 {
+                spread / radius
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
 impl<'a> Dynamics<'a> {
     pub fn new(
         scene: &'a Scene,
@@ -562,6 +617,7 @@ impl<'a> Dynamics<'a> {
             diag: pattern.diagonal_positions(),
             kbuf: CsrMatrix::zeros(pattern),
             tbuf: None,
+            cmat: cbuf.clone(),
             cbuf,
             system,
             law,
@@ -816,7 +872,8 @@ impl<'a> Dynamics<'a> {
         self.kbuf = CsrMatrix::zeros(pattern.clone());
         self.tbuf = None;
         if self.cbuf.is_some() {
-            self.cbuf = Some(CsrMatrix::zeros(pattern));
+            self.cbuf = Some(CsrMatrix::zeros(pattern.clone()));
+            self.cmat = Some(CsrMatrix::zeros(pattern));
         }
     }
 
@@ -976,27 +1033,8 @@ impl<'a> Dynamics<'a> {
                 *f += ra1 * x;
             }
         }
-        if let Some(cbuf) = self.cbuf.as_mut() {
-            let lc: Vec<LocalStiffness> = (0..self.visc.len())
-                .map(|c| {
-                    // the dashpots act while the band is closed, slipping or not (in
-                    // parallel with the friction slider: a viscous shear that vanished
-                    // at the onset of slip would make the force jump by cₛ γ̇ there and
-                    // the iterations cycle between stick and slip)
-                    // at the start of the step and in the trial: a contact that closes
-                    // within the step meets the band's spring alone until the step's end
-                    // (its dashpot, engaged at δ = 0 with the full approach speed, would
-                    // make the force jump there from 0 to cₙ v, a law with no solution at
-                    // the kink that the iterations cycle around: open → closed with a
-                    // dashpot force that reopens it → open)
-                    let state = match (self.committed.state[c], trial.state[c]) {
-                        (ContactState::Open, _) => ContactState::Open,
-                        (_, ContactState::Slip) => ContactState::Stick,
-                        (_, s) => s,
-                    };
-                    secant_local(self.visc[c], state)
-                })
-                .collect();
+        let lc = self.cbuf.is_some().then(|| self.dashpots(&trial.state));
+        if let (Some(lc), Some(cbuf)) = (lc, self.cbuf.as_mut()) {
             self.system.damping_into(&trial.mesh, &lc, cbuf);
             let mut cv = vec![0.0; n];
             cbuf.mul_vec(&v1r, &mut cv);
@@ -1240,14 +1278,18 @@ impl<'a> Dynamics<'a> {
                 && (0..trial.state.len())
                     .any(|k| !frozen[k] && trial.state[k] == ContactState::Slip);
             last_rn = bal.rn;
-            self.effective_into(&trial.mesh, &secant, &terms, false);
+            let geometry = self.blocks_geometry(&trial.mesh);
+            let blocks = geometry.as_ref().map(|m| m.as_ref().unwrap_or(&trial.mesh));
+            self.effective_into(blocks, &trial.mesh, &secant, &trial.state, &terms, false);
             if self.backend.factorize(&self.kbuf).is_err() {
                 return Ok(None);
             }
             // the tangent step where it lowers the out-of-balance force; else the secant step
             let tangent_step = match tangent {
                 true => self
-                    .tangent_step(&trial, &secant, &frozen, &terms, &dq, &bal, it, dug, size)
+                    .tangent_step(
+                        &trial, blocks, &secant, &frozen, &terms, &dq, &bal, it, dug, size,
+                    )
                     .filter(|s| s.2.rn < bal.rn),
                 false => None,
             };
@@ -1288,6 +1330,7 @@ impl<'a> Dynamics<'a> {
     fn tangent_step(
         &mut self,
         trial: &Trial,
+        blocks: Option<&Mesh>,
         secant: &[LocalStiffness],
         frozen: &[bool],
         terms: &StepTerms,
@@ -1312,7 +1355,7 @@ impl<'a> Dynamics<'a> {
                 }
             })
             .collect();
-        self.effective_into(&trial.mesh, &local, terms, true);
+        self.effective_into(blocks, &trial.mesh, &local, &trial.state, terms, true);
         let tolerance =
             (0.1 * self.settings.tolerance * bal.scale / bal.rn.max(1e-300)).clamp(1e-10, 1e-3);
         let out = crate::solve::reuse::gmres_with_factor(
@@ -1335,14 +1378,86 @@ impl<'a> Dynamics<'a> {
         step
     }
 
+    /// The geometry of the deformable blocks' triangles in the iteration matrix of a
+    /// trial on `trial` ([`Dynamics::effective_into`]): the step's start for the blocks
+    /// with interior nodes (whose rows only the triangles fill) that turned by at most
+    /// [`START_GEOMETRY_TURN`] from it, the trial's for the others (`None`: the start's
+    /// for all, `Some(None)`: the trial's for all). A block without interior nodes gains
+    /// nothing from the start's geometry (no row of it stays the same while its contacts
+    /// change), so it keeps the trial's.
+    fn blocks_geometry(&self, trial: &Mesh) -> Option<Option<Mesh>> {
+        let turns = turns(&self.cur, trial);
+        let at_trial: Vec<bool> = self
+            .cur
+            .blocks
+            .iter()
+            .zip(&turns)
+            .map(|(b, &t)| {
+                let interior = b.nodes.len() > b.boundary.len();
+                b.dofs == BlockDofs::Deformable && (t > START_GEOMETRY_TURN || !interior)
+            })
+            .collect();
+        let deformable = |b: usize| self.cur.blocks[b].dofs == BlockDofs::Deformable;
+        if !at_trial.contains(&true) {
+            return None;
+        }
+        if (0..at_trial.len()).all(|b| at_trial[b] || !deformable(b)) {
+            return Some(None);
+        }
+        let mut m = self.cur.clone();
+        for (b, _) in at_trial.iter().enumerate().filter(|(_, &t)| t) {
+            let r = self.cur.blocks[b].nodes.start as usize..self.cur.blocks[b].nodes.end as usize;
+            m.nodes[r.clone()].copy_from_slice(&trial.nodes[r]);
+        }
+        Some(Some(m))
+    }
+
+    /// The contacts' local dashpot matrices for the trial states `state`.
+    fn dashpots(&self, state: &[ContactState]) -> Vec<LocalStiffness> {
+        (0..self.visc.len())
+            .map(|c| {
+                // the dashpots act while the band is closed, slipping or not (in parallel
+                // with the friction slider: a viscous shear that vanished at the onset of
+                // slip would make the force jump by cₛ γ̇ there and the iterations cycle
+                // between stick and slip), at the start of the step and in the trial: a
+                // contact that closes within the step meets the band's spring alone until
+                // the step's end (its dashpot, engaged at δ = 0 with the full approach
+                // speed, would make the force jump there from 0 to cₙ v, a law with no
+                // solution at the kink that the iterations cycle around: open → closed
+                // with a dashpot force that reopens it → open)
+                let state = match (self.committed.state[c], state[c]) {
+                    (ContactState::Open, _) => ContactState::Open,
+                    (_, ContactState::Slip) => ContactState::Stick,
+                    (_, s) => s,
+                };
+                secant_local(self.visc[c], state)
+            })
+            .collect()
+    }
+
     /// The step's effective matrix (1−α_m) c₀ M + (1−α_f) c₁ C + (1−α_f) K for the
-    /// contacts' local stiffnesses `local` on `mesh` (K with its Rayleigh damping,
-    /// (1−α_f) c₁ a₁ K), C of the trial states (assembled by `balance` for this trial),
-    /// into `kbuf`, or into `tbuf` when `second` (the tangent's).
+    /// contacts' local stiffnesses `local` (K with its Rayleigh damping,
+    /// (1−α_f) c₁ a₁ K) and C of the dashpots in the trial states `state`, into `kbuf`;
+    /// into `tbuf` when `second` (the tangent's, with the C of the `kbuf` built before
+    /// it in the same iteration).
+    ///
+    /// The contacts in the trial's geometry `contacts`, the blocks' triangles (and their
+    /// Kelvin–Voigt viscosity) in `blocks` (`None`: the step's start geometry;
+    /// [`Dynamics::blocks_geometry`]), as the static driver's iteration matrix is on the
+    /// last converged geometry (the out-of-balance force, which decides convergence, is
+    /// always the trial geometry's). The interior rows of a block on the start geometry
+    /// then stay the same within a step, and the condensed backend does not refactorize
+    /// its interior after the step's first iteration (on the rocking drums of
+    /// docs/performance.md, "The blocks' interiors on the step's start geometry", those
+    /// refactorizations had taken a third of the run). The contacts stay in the trial's
+    /// geometry: with them on the start's too, the seed arch's voussoirs, which turn by
+    /// up to 10⁻² rad within a step of the collapse, took 2–11 times the iterations.
     fn effective_into(
         &mut self,
-        mesh: &Mesh,
+        blocks: Option<&Mesh>,
+        contacts: &Mesh,
         local: &[LocalStiffness],
+        state: &[ContactState],
         terms: &StepTerms,
         second: bool,
     ) {
@@ -1355,10 +1470,21 @@ impl<'a> Dynamics<'a> {
         } else {
             &mut self.kbuf
         };
-        self.system.stiffness_into(mesh, local, out);
+        let blocks = blocks.unwrap_or(&self.cur);
+        self.system
+            .stiffness_split_into(blocks, contacts, local, out);
+        let lc = (!second && self.cmat.is_some()).then(|| self.dashpots(state));
+        if let (Some(lc), Some(cmat)) = (lc, self.cmat.as_mut()) {
+            self.system.damping_split_into(blocks, contacts, &lc, cmat);
+        }
+        let out = if second {
+            self.tbuf.as_mut().expect("allocated above")
+        } else {
+            &mut self.kbuf
+        };
         let kf = (1.0 - af) * (1.0 + c1 * ra1);
         let mf = (1.0 - am) * c0 + (1.0 - af) * c1 * ra0;
-        match &self.cbuf {
+        match &self.cmat {
             Some(c) => {
                 for (k, cv) in out.values.iter_mut().zip(&c.values) {
                     *k = kf * *k + (1.0 - af) * c1 * cv;

@@ -276,8 +276,21 @@ impl System {
     /// contact's gradients computed (no kept triangles' part or gradients, which it neither
     /// uses nor changes).
     pub fn stiffness_full_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
-        let g = self.contact_gradients(mesh);
-        self.assemble_all(mesh, &self.dt, &g, local, out);
+        self.stiffness_split_into(mesh, mesh, local, out);
+    }
+
+    /// Stiffness (N/m) like [`Self::stiffness_full_into`], with the triangles in the
+    /// configuration `blocks` and the contacts in `contacts` (the same mesh at other node
+    /// positions: the dynamic driver's matrix keeps the blocks' interiors on the step's
+    /// start geometry and takes the contacts in the trial's).
+    pub fn stiffness_split_into(
+        &self,
+        blocks: &Mesh,
+        contacts: &Mesh,
+        local: &[LocalStiffness],
+        out: &mut CsrMatrix,
+    ) {
+        self.assemble_split(blocks, contacts, &self.dt, local, out);
     }
 
     /// The gradients gₙ, gₛ of every contact's relative displacements with respect to its
@@ -393,8 +406,33 @@ impl System {
     /// Cₑ = t A Bᵀ D_v B for the triangles and Tᵀ C′ T for the contacts, with a local
     /// viscosity per contact (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h where they act).
     pub fn damping_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
-        let g = self.contact_gradients(mesh);
-        self.assemble_all(mesh, &self.dv, &g, local, out);
+        self.damping_split_into(mesh, mesh, local, out);
+    }
+
+    /// Damping (N·s/m) like [`Self::damping_into`], split between two configurations
+    /// as [`Self::stiffness_split_into`].
+    pub fn damping_split_into(
+        &self,
+        blocks: &Mesh,
+        contacts: &Mesh,
+        local: &[LocalStiffness],
+        out: &mut CsrMatrix,
+    ) {
+        self.assemble_split(blocks, contacts, &self.dv, local, out);
+    }
+
+    /// [`Self::assemble_all`] with the triangles in `blocks` and the contacts' gradients
+    /// from `contacts`.
+    fn assemble_split(
+        &self,
+        blocks: &Mesh,
+        contacts: &Mesh,
+        d: &[[[f64; 3]; 3]],
+        local: &[LocalStiffness],
+        out: &mut CsrMatrix,
+    ) {
+        let g = self.contact_gradients(contacts);
+        self.assemble_all(blocks, d, &g, local, out);
     }
 
     /// Packed when every contact's local matrix is symmetric, else unsymmetric.

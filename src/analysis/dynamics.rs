@@ -1143,8 +1143,8 @@ impl<'a> Dynamics<'a> {
         let (mut best_rn, mut best_it) = (f64::INFINITY, 0);
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
-            // secant stiffness and damping of the trial states, in the trial geometry. A
-            // contact that keeps opening and closing within the step sits at the kink of
+            // secant stiffness and damping of the trial states (the contacts in the trial
+            // geometry, the blocks as `effective_into` says). A contact that keeps opening and closing within the step sits at the kink of
             // its law (touching with no force: the chatter of a stiff contact), where the
             // secant iteration cycles between the open and the closed linearization; its
             // normal spring then stays in the matrix, weakened by a factor w that drops

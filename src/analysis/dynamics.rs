@@ -1144,12 +1144,13 @@ impl<'a> Dynamics<'a> {
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
             // secant stiffness and damping of the trial states (the contacts in the trial
-            // geometry, the blocks as `effective_into` says). A contact that keeps opening and closing within the step sits at the kink of
-            // its law (touching with no force: the chatter of a stiff contact), where the
-            // secant iteration cycles between the open and the closed linearization; its
-            // normal spring then stays in the matrix, weakened by a factor w that drops
-            // while the contact stays open (so that a contact that really separates is
-            // soon left free) and returns to 1 when it closes.
+            // geometry, the blocks as `effective_into` says). A contact that keeps opening
+            // and closing within the step sits at the kink of its law (touching with no
+            // force: the chatter of a stiff contact), where the secant iteration cycles
+            // between the open and the closed linearization; its normal spring then stays
+            // in the matrix, weakened by a factor w that drops while the contact stays open
+            // (so that a contact that really separates is soon left free) and returns to 1
+            // when it closes.
             for k in 0..flips.len() {
                 let open = trial.state[k] == ContactState::Open;
                 if it > 0 && open != (prev_state[k] == ContactState::Open) {

@@ -222,6 +222,35 @@ impl System {
     /// contacts are assembled, onto a copy of it. The contacts' gradients are kept while
     /// the geometry stays the same. The result is bit-identical either way.
     pub fn stiffness_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
+        self.stiffness_kept(mesh, None, local, out);
+    }
+
+    /// Stiffness (N/m) like [`Self::stiffness_into`], with the triangles in the
+    /// configuration `blocks` and the contacts in `contacts` (the same mesh at other node
+    /// positions: the dynamic driver's matrix keeps the blocks' interiors on the step's
+    /// start geometry and takes the contacts in the trial's). The triangles' part is kept
+    /// as [`Self::stiffness_into`] keeps it, for the positions of `blocks`; the contacts'
+    /// gradients are computed from `contacts` at each call.
+    pub fn stiffness_split_into(
+        &self,
+        blocks: &Mesh,
+        contacts: &Mesh,
+        local: &[LocalStiffness],
+        out: &mut CsrMatrix,
+    ) {
+        self.stiffness_kept(blocks, Some(contacts), local, out);
+    }
+
+    /// [`Self::stiffness_into`] on `mesh`, the contacts' gradients from `contacts` when
+    /// given (then not kept: the kept ones, which [`Self::stiffness_update`] reads, are
+    /// always those of the kept node positions).
+    fn stiffness_kept(
+        &self,
+        mesh: &Mesh,
+        contacts: Option<&Mesh>,
+        local: &[LocalStiffness],
+        out: &mut CsrMatrix,
+    ) {
         let mut guard = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
         let same = same_nodes(&guard.nodes, &mesh.nodes);
         if !same {
@@ -230,9 +259,12 @@ impl System {
             guard.values = None;
             guard.gradients.clear();
         }
-        self.keep_gradients(mesh, &mut guard);
+        if contacts.is_none() {
+            self.keep_gradients(mesh, &mut guard);
+        }
+        let own = contacts.map(|c| self.contact_gradients(c));
         let cache = &mut *guard;
-        let g = &cache.gradients;
+        let g = own.as_deref().unwrap_or(cache.gradients.as_slice());
         if !same {
             return self.assemble_all(mesh, &self.dt, g, local, out);
         }
@@ -276,21 +308,7 @@ impl System {
     /// contact's gradients computed (no kept triangles' part or gradients, which it neither
     /// uses nor changes).
     pub fn stiffness_full_into(&self, mesh: &Mesh, local: &[LocalStiffness], out: &mut CsrMatrix) {
-        self.stiffness_split_into(mesh, mesh, local, out);
-    }
-
-    /// Stiffness (N/m) like [`Self::stiffness_full_into`], with the triangles in the
-    /// configuration `blocks` and the contacts in `contacts` (the same mesh at other node
-    /// positions: the dynamic driver's matrix keeps the blocks' interiors on the step's
-    /// start geometry and takes the contacts in the trial's).
-    pub fn stiffness_split_into(
-        &self,
-        blocks: &Mesh,
-        contacts: &Mesh,
-        local: &[LocalStiffness],
-        out: &mut CsrMatrix,
-    ) {
-        self.assemble_split(blocks, contacts, &self.dt, local, out);
+        self.assemble_split(mesh, mesh, &self.dt, local, out);
     }
 
     /// The gradients gₙ, gₛ of every contact's relative displacements with respect to its
@@ -410,7 +428,7 @@ impl System {
     }
 
     /// Damping (N·s/m) like [`Self::damping_into`], split between two configurations
-    /// as [`Self::stiffness_split_into`].
+    /// as [`Self::stiffness_split_into`] (every element assembled at each call).
     pub fn damping_split_into(
         &self,
         blocks: &Mesh,

@@ -80,6 +80,11 @@ pub struct Stats {
     /// (`Driver::slope_search`, docs/theory.md, "The slope line search") after no
     /// backtracked length lowered the out-of-balance norm.
     pub slope_searches: usize,
+    /// Bonded contacts (cohesion or tensile strength, Mohr–Coulomb) that the static
+    /// driver broke within an increment after they cycled between closed and open in its
+    /// iterations (`Driver::break_cycling_bonds`, docs/theory.md, "Bonds that cannot
+    /// hold"); counted again if the increment is cut and they break again.
+    pub bonds_broken: usize,
     /// Blocks that fell out of the structure and were taken out of the analysis
     /// (`[analysis] fallout = true`, docs/theory.md "Fallout").
     pub fallen_blocks: usize,

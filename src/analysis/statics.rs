@@ -349,6 +349,9 @@ pub struct Driver<'a> {
     /// current arc-length increment (the contact-state corrector, docs/theory.md,
     /// "Contact-state corrector", Eq. F1; empty, or all `None`, elsewhere).
     frozen: Vec<Option<Frozen>>,
+    /// The bonds broken in the current increment ([`Driver::break_cycling_bonds`]): the
+    /// contact and its committed history before, put back if the increment fails.
+    bonds_broken_here: Vec<(usize, crate::material::History)>,
     /// The blocks that fell out ([`Driver::fall_out`]), in the order they fell.
     fallen: Vec<usize>,
     /// The contacts that touch a fallen block, which carry no force.
@@ -513,6 +516,10 @@ const REUSE_TOLERANCE: f64 = 1e-10;
 /// open and slip in waves, still gain 10 % within 60 iterations (the 30×30 wall of
 /// docs/performance.md: its slowest increment improves by that in at most 25).
 const STALL_ITERATIONS: usize = 60;
+/// A bonded contact that has changed between closed and open this many times in an
+/// increment's iterations breaks ([`Driver::break_cycling_bonds`]): closed → open →
+/// closed → open.
+const BOND_BREAK_FLIPS: u32 = 3;
 /// Step lengths 1, ½, ¼, ⅛ of the line search on the out-of-balance norm.
 const LINE_SEARCH_STEPS: usize = 4;
 /// Step lengths 1 … 2⁻¹¹ of the line search along the tangent step that replaces a secant
@@ -611,6 +618,7 @@ impl<'a> Driver<'a> {
             frozen: Vec::new(),
             fallen: Vec::new(),
             fallen_contacts: Vec::new(),
+            bonds_broken_here: Vec::new(),
             fallen_pins: Vec::new(),
             spare: std::sync::Mutex::new(Vec::new()),
         })
@@ -1254,6 +1262,25 @@ impl<'a> Driver<'a> {
         presc: &[Point],
         guess: Option<Vec<f64>>,
     ) -> Result<std::result::Result<Trial, (IncrementFailure, Failure)>> {
+        self.bonds_broken_here.clear();
+        let out = self.iterate(f_ext, presc, guess);
+        if !matches!(out, Ok(Ok(_))) {
+            // the retry (a cut increment, the capacity search's next bracket) starts from
+            // the committed state as it was
+            for (k, h) in self.bonds_broken_here.drain(..) {
+                self.committed.history[k] = h;
+            }
+        }
+        out
+    }
+
+    /// The iterations of [`Driver::increment`].
+    fn iterate(
+        &mut self,
+        f_ext: &[f64],
+        presc: &[Point],
+        guess: Option<Vec<f64>>,
+    ) -> Result<std::result::Result<Trial, (IncrementFailure, Failure)>> {
         let n = self.cur.n_dofs;
         let extrapolated = guess.is_some();
         let mut dq = guess.unwrap_or_else(|| vec![0.0; n]);
@@ -1297,9 +1324,21 @@ impl<'a> Driver<'a> {
         let mut best_rn = f64::INFINITY;
         let mut best_it = 0;
         let mut tangent_only = false;
+        let mut open_flips = vec![0u32; trial.state.len()];
+        let mut bonds_broken = false;
         self.gmres_failed = false;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
+            if it > 0 {
+                let negligible = self.settings.tolerance * scale;
+                count_open_flips(
+                    &trial,
+                    &prev_state,
+                    &prev_force,
+                    negligible,
+                    &mut open_flips,
+                );
+            }
             let r = self.out_of_balance(f_ext, &trial.f_int);
             if !self.pins.is_empty() {
                 scale = self.force_scale(f_ext, &trial.f_int);
@@ -1376,6 +1415,17 @@ impl<'a> Driver<'a> {
                     tangent_only = true;
                     self.stats.tangent_fallbacks += 1;
                     best_it = it;
+                } else if !bonds_broken && self.break_cycling_bonds(&open_flips) {
+                    // the iterations cycled on bonds that cannot hold: go on with them
+                    // broken (once an increment: where they still stall the load is beyond
+                    // what the contacts can hold)
+                    bonds_broken = true;
+                    let t = self.trial(&dq, presc);
+                    self.recycle(std::mem::replace(&mut trial, t));
+                    (best_rn, best_it) = (f64::INFINITY, it);
+                    prev_state = trial.state.clone();
+                    prev_force = trial.force.clone();
+                    continue;
                 } else {
                     // stagnation: the load is beyond what the contacts can hold from here
                     break;
@@ -1588,6 +1638,38 @@ impl<'a> Driver<'a> {
             forces: trial.force.clone(),
             loads,
         }
+    }
+
+    /// Breaks the bonds that cannot hold, where an increment's iterations stalled: every
+    /// bonded contact (cohesion or tensile strength, intact) that went closed → open →
+    /// closed → open ([`BOND_BREAK_FLIPS`], `open_flips`: [`count_open_flips`]) in them
+    /// has its bond broken for good from there on (docs/theory.md, "Bonds that cannot
+    /// hold"). Such a contact sits at the jump of its law: closed it carries a cohesive
+    /// shear that its equilibrium holds only with the contact in tension, past its
+    /// strength, and open it carries nothing, and its equilibrium closes it again. No
+    /// intact state is consistent, so the iterations cycle until the stall rule fails the
+    /// increment (a false collapse: the free-surface tunnel of docs/performance.md),
+    /// where the brittle law says the bond has broken. Only where the increment would
+    /// otherwise fail, so that a run whose increments converge is not changed. Returns
+    /// whether a bond broke (the trial must then be evaluated again).
+    fn break_cycling_bonds(&mut self, open_flips: &[u32]) -> bool {
+        let mut broke = false;
+        for (k, &flips) in open_flips.iter().enumerate() {
+            if flips < BOND_BREAK_FLIPS || k >= self.committed.history.len() {
+                continue;
+            }
+            let before = self.committed.history[k];
+            if let Some(broken) = self.law.get(k).broken_bond(before) {
+                if super::tracing() {
+                    eprintln!("  bond broken: contact {k} after {flips} changes");
+                }
+                self.committed.history[k] = broken;
+                self.bonds_broken_here.push((k, before));
+                self.stats.bonds_broken += 1;
+                broke = true;
+            }
+        }
+        broke
     }
 
     /// The slope line search: the step length α* along the correction `delta` from `dq`
@@ -2493,5 +2575,26 @@ pub fn run_with_progress<'a>(
             Ok(out)
         }
         AnalysisType::Dynamic => unreachable!("the dynamic driver runs elsewhere"),
+    }
+}
+
+/// Counts, per contact, the changes between closed and open from the last iteration's
+/// states `prev_state` (forces `prev_force`) to `trial`'s, where the contact carries a
+/// force above `negligible` (N) on one side ([`Driver::break_cycling_bonds`]).
+fn count_open_flips(
+    trial: &Trial,
+    prev_state: &[ContactState],
+    prev_force: &[[f64; 2]],
+    negligible: f64,
+    open_flips: &mut [u32],
+) {
+    let matters = |f: [f64; 2]| f[0].hypot(f[1]) > negligible;
+    for (k, flips) in open_flips.iter_mut().enumerate() {
+        let open = trial.state[k] == ContactState::Open;
+        if open != (prev_state[k] == ContactState::Open)
+            && (matters(trial.force[k]) || matters(prev_force[k]))
+        {
+            *flips += 1;
+        }
     }
 }

@@ -166,6 +166,15 @@ impl JointLaw {
             JointLaw::Softening(m) => m.elastic,
         }
     }
+    /// The history of a contact whose bond breaks for good at opening, for a law whose
+    /// strength jumps there ([`MohrCoulomb::broken_bond`]); `None` for the softening law,
+    /// whose strength falls continuously with the opening.
+    pub fn broken_bond(&self, history: History) -> Option<History> {
+        match self {
+            JointLaw::MohrCoulomb(m) => m.broken_bond(history),
+            JointLaw::Softening(_) => None,
+        }
+    }
     /// tan φ: the dependence of the shear strength on the normal force.
     pub fn tan_phi(&self) -> f64 {
         match self {

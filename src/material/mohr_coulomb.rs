@@ -41,6 +41,15 @@ impl MohrCoulomb {
 }
 
 impl MohrCoulomb {
+    /// The history of this contact's bond broken for good, where `history` has it intact
+    /// and the bond carries something (cohesion or tensile strength): the strength such a
+    /// contact loses at once when it opens, its cohesive shear and its tension, makes its
+    /// law jump there. `None` for a dry contact or a bond already broken.
+    pub fn broken_bond(&self, history: History) -> Option<History> {
+        let bonded = self.cohesion > 0.0 || self.tensile_strength > 0.0;
+        (bonded && history[0] < 0.5).then_some([1.0, 0.0])
+    }
+
     /// The return to the strength envelope with the given tensile strength (Pa) and
     /// cohesion (Pa): forces (N) and state.
     fn ret(

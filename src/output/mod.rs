@@ -137,6 +137,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "tangent_fallbacks": s.tangent_fallbacks,
             "free_motions": s.free_motions,
             "slope_searches": s.slope_searches,
+            "bonds_broken": s.bonds_broken,
             "fallen_blocks": s.fallen_blocks,
             "load_cuts": s.load_cuts,
             "contact_releases": s.contact_releases,

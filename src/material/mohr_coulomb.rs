@@ -178,4 +178,27 @@ mod tests {
         let (_, s, h) = law().update_history(1.0, [0.0, 0.0], [0.0; 2], [1e-6, 0.0]);
         assert_eq!((s, h), (ContactState::Open, [0.0; 2]));
     }
+
+    /// The history `broken_bond` gives is the one the law itself writes when the bond
+    /// breaks, and with it the contact holds no cohesion: under 1 MPa of compression a
+    /// shear of 1 MPa that the intact bond (limit 2.5 MPa) holds slips at the dry limit
+    /// 0.5 MPa.
+    #[test]
+    fn a_bond_broken_by_the_driver_is_the_laws_broken_bond() {
+        let m = MohrCoulomb {
+            cohesion: 2e6,
+            tensile_strength: 0.0,
+            ..law()
+        };
+        let broken = m.broken_bond([0.0; 2]).expect("an intact bond");
+        let (_, _, written) = m.update_history(1.0, [0.0, 0.0], [0.0; 2], [1e-6, 0.0]);
+        assert_eq!(broken, written);
+        assert_eq!(m.broken_bond(broken), None, "broken twice");
+        assert_eq!(law().broken_bond([0.0; 2]), None, "a dry joint has no bond");
+        let shear = [-1e6, 1e6];
+        let (f, s, _) = m.update_history(1.0, shear, [0.0; 2], [0.0, 0.0]);
+        assert_eq!((f, s), (shear, ContactState::Stick));
+        let (f, s, _) = m.update_history(1.0, shear, broken, [0.0, 0.0]);
+        assert_eq!((f, s), ([-1e6, 0.5e6], ContactState::Slip));
+    }
 }

@@ -1474,9 +1474,21 @@ impl<'a> Dynamics<'a> {
         let blocks = blocks.unwrap_or(&self.cur);
         self.system
             .stiffness_split_into(blocks, contacts, local, out);
-        let lc = (!second && self.cmat.is_some()).then(|| self.dashpots(state));
-        if let (Some(lc), Some(cmat)) = (lc, self.cmat.as_mut()) {
-            self.system.damping_split_into(blocks, contacts, &lc, cmat);
+        if !second {
+            if let (true, Some(cbuf), Some(cmat)) = (
+                std::ptr::eq(blocks, contacts),
+                self.cbuf.as_ref(),
+                self.cmat.as_mut(),
+            ) {
+                // everything in the trial's geometry: C is the one `balance` assembled for
+                // this trial (the caller's `bal`), in the same states
+                cmat.values.copy_from_slice(&cbuf.values);
+            } else {
+                let lc = self.cmat.is_some().then(|| self.dashpots(state));
+                if let (Some(lc), Some(cmat)) = (lc, self.cmat.as_mut()) {
+                    self.system.damping_split_into(blocks, contacts, &lc, cmat);
+                }
+            }
         }
         let out = if second {
             self.tbuf.as_mut().expect("allocated above")

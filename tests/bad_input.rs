@@ -90,6 +90,7 @@ fn every_file_has_a_test() {
 }
 
 cases! {
+    accept_residual_without_arc_length,
     softening_without_fracture_energy,
     cap_without_softening,
     line_search_not_boolean,

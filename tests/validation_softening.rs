@@ -562,3 +562,29 @@ fn a_held_dilating_joint_builds_up_compression_to_the_dilatancy_stress() {
     assert!((ends[0] + su).abs() < 2e-3 * su, "{ends:?}");
     assert!((ends[1] - s0).abs() < 1e-6 * su, "{ends:?}");
 }
+
+/// (e) `accept_residual` acts only where an increment would end the path: on the
+///     snap-back of (d), whose increments all converge, the option changes nothing —
+///     the same points to the last bit, and no increment counted as accepted.
+#[test]
+fn accept_residual_leaves_a_converging_path_alone() {
+    let run = |extra: &str| {
+        let text = snap_back_scene("dissipation").replace(
+            "path = \"dissipation\"\n",
+            &format!("path = \"dissipation\"\n{extra}"),
+        );
+        let (_, out) = common::solve(&common::scene(&text));
+        let path = out.capacity_curve.as_ref().unwrap().path.clone().unwrap();
+        (curve(&out), path)
+    };
+    let (strict, strict_path) = run("");
+    let (lenient, path) = run("accept_residual = 1e-3\n");
+    assert_eq!(path.end, "the end of the push");
+    assert_eq!(
+        (path.accepted, path.accepted_residual),
+        (0, 0.0),
+        "{path:?}"
+    );
+    assert_eq!(path.increments, strict_path.increments);
+    assert_eq!(strict, lenient);
+}

@@ -43,6 +43,11 @@ pub struct PushPath {
     /// dissipation (Eq. A2) and under displacement control of the block (Eq. A3, or
     /// `path = "displacement"`).
     pub increments: [usize; 3],
+    /// The increments taken unconverged, within `accept_residual`
+    /// ([`super::statics::arc_length::ArcLength::accept`]), and the largest relative
+    /// out-of-balance force one of them was taken at (0 if none).
+    pub accepted: usize,
+    pub accepted_residual: f64,
     /// Why the push ended: "the end of the push" or why it stopped short.
     pub end: String,
 }

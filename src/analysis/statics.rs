@@ -265,6 +265,7 @@ pub const KEYS: &[&str] = &[
     "gravity_steps",
     "path",
     "arc_length",
+    "accept_residual",
 ];
 
 /// The loads of one phase as functions of its load factor.
@@ -2402,11 +2403,16 @@ pub fn run_with_progress<'a>(
             record: Some(push.block),
         };
         d.begin_phase("push", Some(steps), 1.0);
-        let (s, why, increments) = match d.settings.arc {
+        let (s, why, increments, accepted) = match d.settings.arc {
             Some(arc) => arc_length::run(&mut d, &phase.base, &push, &arc, steps)?,
             None => {
                 let (s, why) = d.run_phase(&phase, steps)?;
-                (s, why, [0, 0, d.push_curve.len().saturating_sub(1)])
+                (
+                    s,
+                    why,
+                    [0, 0, d.push_curve.len().saturating_sub(1)],
+                    (0, 0.0),
+                )
             }
         };
         let points = std::mem::take(&mut d.push_curve);
@@ -2425,6 +2431,8 @@ pub fn run_with_progress<'a>(
                 reached: s,
                 furthest,
                 increments,
+                accepted: accepted.0,
+                accepted_residual: accepted.1,
                 end: why.clone().unwrap_or_else(|| "the end of the push".into()),
             }),
         };

@@ -163,6 +163,10 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
                     "dissipation": p.increments[1],
                     "displacement": p.increments[2],
                 },
+                "accepted": {
+                    "increments": p.accepted,
+                    "largest_residual": p.accepted_residual,
+                },
                 "end": p.end,
             })),
         })),

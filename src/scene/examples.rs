@@ -565,6 +565,10 @@ push_block = "beam"
 push_displacement = [0.004, 0.0]
 path = "dissipation"
 tolerance = 1e-5
+# an increment that fails every constraint at its least step, its best iterate within
+# 10 x the tolerance, is taken there (J7D's iterations stall at 1.0-3.3e-5 of the load
+# at 11 states past its peak: docs/performance.md, "Eindhoven walls")
+accept_residual = 1e-4
 "#
         )
     };

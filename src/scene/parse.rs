@@ -165,6 +165,7 @@ pub const ANALYSIS_KEYS: &[&str] = &[
     "gravity_steps",
     "path",
     "arc_length",
+    "accept_residual",
     "integrator",
     "alpha",
     "rho_inf",
@@ -1617,6 +1618,23 @@ fn parse_analysis(
                 format!("[analysis] key '{k}'"),
                 format!("'{k}' must be true or false"),
                 format!("write {k} = true or {k} = false"),
+            ));
+        }
+    }
+    // the arc-length keys without an arc-length path (read by
+    // `analysis::statics::arc_length`, which checks them again): checked here to name
+    // their line
+    let arc = matches!(
+        extra.get("path").and_then(|v| v.as_str()),
+        Some("arc_length" | "dissipation")
+    );
+    for k in ["arc_length", "accept_residual"] {
+        if !arc && extra.contains_key(k) {
+            return Err(err_at(
+                src.key_line(at, k),
+                format!("[analysis] key '{k}'"),
+                format!("{k} is given but the path is not arc length"),
+                format!("add path = \"arc_length\" or \"dissipation\", or remove {k}"),
             ));
         }
     }

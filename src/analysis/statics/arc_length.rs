@@ -63,6 +63,13 @@ pub struct ArcLength {
     /// `path = "dissipation"`: the cylinder of Eq. A1 until the contacts start to
     /// dissipate, then the energy dissipated per increment (Eq. A2).
     pub dissipation: bool,
+    /// `accept_residual`: an increment that fails every constraint at its least step is
+    /// taken at its best iterate with the true laws when that iterate's relative
+    /// out-of-balance force is at most this (0: never, the default). The force left is
+    /// carried into the next increment, whose iterations remove it (the out-of-balance
+    /// force is always that of the total state); `summary.json` counts such increments
+    /// and their largest force (`curve.path.accepted`).
+    pub accept: f64,
 }
 
 impl ArcLength {
@@ -89,12 +96,16 @@ impl ArcLength {
                 )),
         };
         if !arc {
-            if x.contains_key("arc_length") {
-                return Err(
-                    Error::new("arc_length is given but the path is not arc length")
-                        .place(place("arc_length"))
-                        .fix("add path = \"arc_length\", or remove arc_length"),
-                );
+            for key in ["arc_length", "accept_residual"] {
+                if x.contains_key(key) {
+                    return Err(Error::new(format!(
+                        "{key} is given but the path is not arc length"
+                    ))
+                    .place(place(key))
+                    .fix(format!(
+                        "add path = \"arc_length\" or \"dissipation\", or remove {key}"
+                    )));
+                }
             }
             return Ok(None);
         }
@@ -113,9 +124,11 @@ impl ArcLength {
                 1e3,
             )?),
         };
+        let accept = super::super::analysis_number(scene, "accept_residual", 0.0, 0.0, 0.1)?;
         Ok(Some(ArcLength {
             length,
             dissipation,
+            accept,
         }))
     }
 }
@@ -225,10 +238,34 @@ const SECANT_STEPS: usize = 4;
 /// after it (N), the new increment of the unknowns, its δλ (N) and the trial there.
 type Correction = (f64, Vec<f64>, f64, Trial);
 
+/// The iterate of a failed increment with the least out-of-balance force under the
+/// true laws (no contact frozen), kept for `accept_residual` ([`ArcLength::accept`]).
+struct Unconverged {
+    /// Its relative out-of-balance force.
+    residual: f64,
+    trial: Trial,
+    /// Its Δλ (N).
+    dlam: f64,
+}
+
+impl Unconverged {
+    /// Keep `trial` in `best` if it is better than the one there.
+    fn keep(best: &mut Option<Box<Unconverged>>, residual: f64, trial: &Trial, dlam: f64) {
+        if best.as_ref().is_none_or(|b| residual < b.residual) {
+            *best = Some(Box::new(Unconverged {
+                residual,
+                trial: trial.clone(),
+                dlam,
+            }));
+        }
+    }
+}
+
 /// Why an arc-length increment failed.
 enum StepFailure {
-    /// Not converged: the relative out-of-balance force left.
-    NoConvergence(f64),
+    /// Not converged: the relative out-of-balance force left, and the best iterate
+    /// with the true laws when `accept_residual` is set.
+    NoConvergence(f64, Option<Box<Unconverged>>),
     /// The constraint has no real root for any δλ near the path.
     Divergence,
     /// With `path = "dissipation"`: the increment ends with a pull on the pushed block.
@@ -712,6 +749,9 @@ impl Driver<'_> {
         // the checks of Eq. F2 in a row that have not lowered it
         let mut stuck = 0;
         let mut carried: Option<Trial> = None;
+        // `accept_residual`: the best iterate with the true laws, kept only when asked
+        let keep = self.settings.arc.is_some_and(|a| a.accept > 0.0);
+        let mut best_true: Option<Box<Unconverged>> = None;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
             let fe = f_ext(lam0 + dlam);
@@ -731,6 +771,9 @@ impl Driver<'_> {
                 let r_true = self.out_of_balance(&fe, &truth.f_int);
                 let s_true = self.force_scale(&fe, &truth.f_int);
                 let rn_true = Self::norm(&r_true);
+                if keep {
+                    Unconverged::keep(&mut best_true, rn_true / s_true, &truth, dlam);
+                }
                 let n_frozen = held.iter().filter(|f| f.is_some()).count();
                 if super::super::tracing() {
                     eprintln!(
@@ -754,7 +797,7 @@ impl Driver<'_> {
                         // one contact frozen at 9.468·10⁻⁴ with the true laws)
                         stuck += 1;
                         if stuck >= CHECK_LIMIT {
-                            return Ok(Err(StepFailure::NoConvergence(rn / scale)));
+                            return Ok(Err(StepFailure::NoConvergence(rn / scale, best_true)));
                         }
                     } else {
                         stuck = 0;
@@ -768,6 +811,9 @@ impl Driver<'_> {
                 }
             }
             residual = rn / scale;
+            if keep && self.frozen.iter().all(Option::is_none) {
+                Unconverged::keep(&mut best_true, residual, &trial, dlam);
+            }
             if let Some(pr) = self.progress.as_deref_mut() {
                 pr.iteration(it, residual);
             }
@@ -869,7 +915,7 @@ impl Driver<'_> {
                 }
             }
             let Some((_, next, dl_it, t)) = pick else {
-                return Ok(Err(StepFailure::NoConvergence(residual)));
+                return Ok(Err(StepFailure::NoConvergence(residual, best_true)));
             };
             dq = next;
             dlam += dl_it;
@@ -879,24 +925,30 @@ impl Driver<'_> {
                 return Ok(Err(StepFailure::Divergence));
             }
         }
-        Ok(Err(StepFailure::NoConvergence(residual)))
+        Ok(Err(StepFailure::NoConvergence(residual, best_true)))
     }
 }
+
+/// How [`run`] ended: the fraction of the path's end reached, why it stopped short (if it
+/// did), the converged increments on the cylinder, the dissipation and under
+/// displacement control, and the increments accepted unconverged with the largest
+/// relative out-of-balance force one was left at.
+type PathRun = (f64, Option<String>, [usize; 3], (usize, f64));
 
 /// Follow the push of `push` by arc length from the committed state under the external
 /// force `base` (N), to the displacement `push_displacement` along P̂, in increments of
 /// the settings' Δl (halved when one fails, up to `max_cuts` times in a row, and grown
 /// back after increments that converge); with `path = "dissipation"` each increment tries
-/// Eq. A2, Eq. A3 and Eq. A1 in turn. Returns the fraction of the path's end reached,
-/// when it stopped short why, and the converged increments on the cylinder, the
-/// dissipation and under displacement control.
+/// Eq. A2, Eq. A3 and Eq. A1 in turn; with `accept_residual` an increment that fails
+/// them all is taken at its best iterate within it ([`ArcLength::accept`]). Returns how
+/// the path ended ([`PathRun`]).
 pub(super) fn run(
     d: &mut Driver,
     base: &[f64],
     push: &Push,
     arc: &ArcLength,
     steps: usize,
-) -> Result<(f64, Option<String>, [usize; 3])> {
+) -> Result<PathRun> {
     let s = setup(d, push);
     let f = s.first;
     let mut pins = vec![(f + 2, 0.0)];
@@ -927,6 +979,7 @@ pub(super) fn run(
                     0.0,
                     Some("the pushed block is free to move: no stiffness holds it".into()),
                     [0; 3],
+                    (0, 0.0),
                 ));
             };
             let moved = up[f] * s.dir[0] + up[f + 1] * s.dir[1];
@@ -958,8 +1011,21 @@ pub(super) fn run(
     // a path that never reaches its end (it turns back for good) stops after this many
     let limit = 50 * steps.max(1);
     let mut done = 0;
+    // `accept_residual`: the best iterate of the current increment's failed tries (with
+    // the constraint it was tried under), the one taken in place of a failure, and the
+    // increments so taken with their largest out-of-balance force
+    let mut unconverged: Option<(Box<Unconverged>, Kind, Constraint)> = None;
+    let mut forced: Option<(Box<Unconverged>, Kind, Constraint)> = None;
+    let mut accepted = (0usize, 0.0f64);
+    // the constraints' steps (Δl, Δa, Δτ) at the first try of the increment, which the
+    // increment after an accepted one starts from again (the cuts of the failed tries
+    // do not carry over: at the least steps J7D crept by 2·10⁻⁹ m an increment)
+    let mut sizes = (dl, da, tau);
     while along(d) < s.target * (1.0 - 1e-9) && done < limit {
         let free = (d.cur.n_dofs - d.pins.len()) as f64;
+        if cuts == 0 && level == 0 && forced.is_none() {
+            sizes = (dl, da, tau);
+        }
         // the constraints in the order they are tried for this increment (Gutiérrez
         // 2004; Verhoosel et al. 2009): with path = "dissipation" the one that worked
         // last, then the others; plain arc length has the cylinder alone
@@ -969,14 +1035,32 @@ pub(super) fn run(
             (true, true) if pushing => vec![Kind::Push, Kind::Dissipation, Kind::Cylinder],
             (true, true) => vec![Kind::Dissipation, Kind::Push, Kind::Cylinder],
         };
-        let kind = order[level];
-        let constraint = match kind {
+        let mut kind = order[level];
+        let mut constraint = match kind {
             Kind::Cylinder => Constraint::Cylinder(dl * dl * free),
             Kind::Dissipation => Constraint::Dissipation(tau.map_or(0.0, |t| t.0)),
             Kind::Push => Constraint::Push(da.min(s.target - along(d))),
         };
-        let prev = previous.as_ref().map(|(q, l, e)| (q.as_slice(), *l, *e));
-        let step = d.arc_step(base, &s.p, lam, constraint, prev);
+        let step = match forced.take() {
+            Some((best, k, c)) => {
+                // every constraint failed: the best iterate, within `accept_residual`
+                (kind, constraint) = (k, c);
+                accepted.0 += 1;
+                accepted.1 = accepted.1.max(best.residual);
+                if super::super::tracing() {
+                    eprintln!(
+                        "arc increment accepted unconverged at {:.3e} of the load ({constraint:?})",
+                        best.residual
+                    );
+                }
+                let dissipated = d.dissipated(&best.trial);
+                Ok(Ok((best.trial, best.dlam, dissipated)))
+            }
+            None => {
+                let prev = previous.as_ref().map(|(q, l, e)| (q.as_slice(), *l, *e));
+                d.arc_step(base, &s.p, lam, constraint, prev)
+            }
+        };
         d.frozen.clear();
         let step = match step? {
             // a push cannot pull: with path = "dissipation" an increment that takes the
@@ -1038,11 +1122,13 @@ pub(super) fn run(
                                 .into(),
                         ),
                         counts,
+                        accepted,
                     ));
                 }
                 done += 1;
                 cuts = 0;
                 level = 0;
+                unconverged = None;
                 if d.report.iterations <= d.settings.max_iterations / 10 {
                     dl = (2.0 * dl).min(dl_max);
                     da = (2.0 * da).min(da_max);
@@ -1051,8 +1137,18 @@ pub(super) fn run(
                     }
                 }
             }
-            Err(why) => {
+            Err(mut why) => {
                 let pulls = matches!(why, StepFailure::Pulls);
+                if let StepFailure::NoConvergence(_, best) = &mut why {
+                    if let Some(b) = best.take() {
+                        if unconverged
+                            .as_ref()
+                            .is_none_or(|u| b.residual < u.0.residual)
+                        {
+                            unconverged = Some((b, kind, constraint));
+                        }
+                    }
+                }
                 // the step of this constraint halved, unless that takes it below its
                 // least value: Δl and Δa their largest halved `max_cuts` times, Δτ its
                 // largest halved 2 `max_cuts` times (J4D at 26 mm turns its snap-back
@@ -1104,18 +1200,29 @@ pub(super) fn run(
                     }
                     continue;
                 }
+                if let Some(u) = unconverged.take() {
+                    // (not an iterate that pulls on the block, which would fail again)
+                    if u.0.residual <= arc.accept && !(arc.dissipation && lam + u.0.dlam < 0.0) {
+                        // take the best iterate of the tries, and go on from there
+                        forced = Some(u);
+                        cuts = 0;
+                        level = 0;
+                        (dl, da, tau) = sizes;
+                        continue;
+                    }
+                }
                 let what = match order.len() {
                     1 => "",
                     2 => " (the cylinder and displacement control of the block tried)",
                     _ => " (the dissipation, displacement control of the block and the cylinder tried)",
                 };
                 let why = match why {
-                    StepFailure::NoConvergence(r) => format!("the out-of-balance force stays at {r:.2e} of the load along the arc{what}"),
+                    StepFailure::NoConvergence(r, _) => format!("the out-of-balance force stays at {r:.2e} of the load along the arc{what}"),
                     StepFailure::Divergence => format!("the displacements grow without bound along the arc{what}: the blocks move without restraint"),
                     StepFailure::Pulls => format!("the path turns back to a pull on the block{what}"),
                 };
                 d.pins.clear();
-                return Ok((along(d) / s.target, Some(why), counts));
+                return Ok((along(d) / s.target, Some(why), counts, accepted));
             }
         }
     }
@@ -1128,9 +1235,10 @@ pub(super) fn run(
                 "the path did not reach the end of the push in {limit} increments"
             )),
             counts,
+            accepted,
         ));
     }
-    Ok((1.0, None, counts))
+    Ok((1.0, None, counts, accepted))
 }
 
 #[cfg(test)]

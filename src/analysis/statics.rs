@@ -1325,12 +1325,19 @@ impl<'a> Driver<'a> {
         let mut best_rn = f64::INFINITY;
         let mut best_it = 0;
         let mut tangent_only = false;
-        let mut open_flips = vec![0u32; trial.state.len()];
+        // the closed ↔ open changes that break bonds, counted only where a joint has a
+        // bond to break ([`Driver::break_cycling_bonds`])
+        let bonded = self
+            .law
+            .laws
+            .iter()
+            .any(|l| l.broken_bond([0.0; 2]).is_some());
+        let mut open_flips = vec![0u32; if bonded { trial.state.len() } else { 0 }];
         let mut bonds_broken = false;
         self.gmres_failed = false;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
-            if it > 0 {
+            if it > 0 && bonded {
                 let negligible = self.settings.tolerance * scale;
                 count_open_flips(
                     &trial,

@@ -30,7 +30,9 @@ use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
     SymbolicCholeskyRaw, SymmetricOrdering,
 };
-use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
+use faer::sparse::linalg::lu::{
+    factorize_symbolic_lu, LuRef, LuSymbolicParams, NumericLu, SymbolicLu,
+};
 use faer::sparse::linalg::{LuError, SupernodalThreshold};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
@@ -210,6 +212,29 @@ pub(crate) fn cholesky_flops(pattern: &CsrPattern) -> Result<f64, SolveError> {
     Ok(symbolic_flops(&symbolic))
 }
 
+/// faer's choice between its simplicial and supernodal Cholesky factorizations compares
+/// the symbolic factor's flops per entry, (Σⱼ cⱼ + Σⱼ cⱼ(cⱼ + 1)/2) / nnz(L) with cⱼ the
+/// entries of column j, with 40 times the threshold it is given ([`SupernodalThreshold`];
+/// 1 = faer's automatic choice, at a ratio of 40). dfem's matrices reach the crossover far
+/// below 40: the contacts couple whole blocks (a rigid block's three unknowns, a deformable
+/// block's contact nodes), which the supernodes take as dense blocks. One numeric
+/// factorization each, one thread, simplicial against supernodal (`cargo bench --bench
+/// supernodal`; docs/performance.md, "Supernodal from a flop ratio of 12"): ratio 5.6
+/// (the arch example) 0.017 against 0.018 ms; 10.7–11.7 (the wall and tunnel examples)
+/// the same; 13.1 (10 × 10 rigid wall) 0.099 against 0.067 ms; 21.2 (the column,
+/// uncondensed) 3.0 against 1.5 ms; 31.6 (30 × 30 rigid wall) 3.5 against 1.2 ms; 35.7
+/// (the Eindhoven wall J4D) 8.3 against 2.7 ms; 40.4 (P2, where faer switches) 9.4 against
+/// 2.5 ms. A supernodal solve costs up to twice a simplicial one on the small matrices
+/// (0.012 against 0.026 ms on the wall example), so the switch is set just above the
+/// crossover. faer's LU takes the same threshold on its own measure of L + U; there
+/// supernodal pays from smaller matrices still (the wall example: 0.83 against 0.28 ms).
+pub const SUPERNODAL_FLOP_RATIO: f64 = 12.0;
+/// faer's own factor on the flop ratio (`CHOLESKY_SUPERNODAL_RATIO_FACTOR` and
+/// `LU_SUPERNODAL_RATIO_FACTOR` in faer 0.24), by which its threshold is scaled.
+const FAER_RATIO_FACTOR: f64 = 40.0;
+/// The [`SupernodalThreshold`] that puts faer's switch at [`SUPERNODAL_FLOP_RATIO`].
+pub const DEFAULT_SUPERNODAL_THRESHOLD: f64 = SUPERNODAL_FLOP_RATIO / FAER_RATIO_FACTOR;
+
 /// Shared implementation of the LLᵀ and LDLᵀ backends.
 pub(crate) struct CholeskyCore {
     kind: Kind,
@@ -243,7 +268,7 @@ impl CholeskyCore {
             kind,
             custom_perm: None,
             ordering: FillOrdering::Amd,
-            supernodal_threshold: 1.0,
+            supernodal_threshold: DEFAULT_SUPERNODAL_THRESHOLD,
             threads: 1,
             relax: None,
             huge_pages: true,
@@ -254,6 +279,16 @@ impl CholeskyCore {
                 ..Default::default()
             },
         }
+    }
+
+    /// Whether the last analysis chose faer's supernodal factorization (`None` before the
+    /// first analysis).
+    fn supernodal(&self) -> Option<bool> {
+        let an = self.analysis.as_ref()?;
+        Some(matches!(
+            an.symbolic.raw(),
+            SymbolicCholeskyRaw::Supernodal(_)
+        ))
     }
 
     fn par(&self) -> Par {
@@ -586,8 +621,16 @@ impl FaerCholesky {
         self.0.solve(rhs)
     }
 
-    /// Sets faer's supernodal threshold (takes effect at the next analysis): 1 = automatic
-    /// (default), 0 = always supernodal, `f64::INFINITY` = always simplicial.
+    /// Whether the last analysis chose faer's supernodal factorization, rather than its
+    /// simplicial one (`None` before the first analysis).
+    pub fn supernodal(&self) -> Option<bool> {
+        self.0.supernodal()
+    }
+
+    /// Sets faer's supernodal threshold (takes effect at the next analysis): supernodal
+    /// where the flops per factor entry exceed 40 times it; [`DEFAULT_SUPERNODAL_THRESHOLD`]
+    /// (default: a ratio of [`SUPERNODAL_FLOP_RATIO`]), 1 = faer's automatic choice,
+    /// 0 = always supernodal, `f64::INFINITY` = always simplicial.
     pub fn with_supernodal_threshold(mut self, threshold: f64) -> Self {
         self.0.supernodal_threshold = threshold;
         self.0.analysis = None;
@@ -654,8 +697,16 @@ impl FaerLdlt {
         Self(CholeskyCore::new(Kind::Ldlt))
     }
 
-    /// Sets faer's supernodal threshold (takes effect at the next analysis): 1 = automatic
-    /// (default), 0 = always supernodal, `f64::INFINITY` = always simplicial.
+    /// Whether the last analysis chose faer's supernodal factorization, rather than its
+    /// simplicial one (`None` before the first analysis).
+    pub fn supernodal(&self) -> Option<bool> {
+        self.0.supernodal()
+    }
+
+    /// Sets faer's supernodal threshold (takes effect at the next analysis): supernodal
+    /// where the flops per factor entry exceed 40 times it; [`DEFAULT_SUPERNODAL_THRESHOLD`]
+    /// (default: a ratio of [`SUPERNODAL_FLOP_RATIO`]), 1 = faer's automatic choice,
+    /// 0 = always supernodal, `f64::INFINITY` = always simplicial.
     pub fn with_supernodal_threshold(mut self, threshold: f64) -> Self {
         self.0.supernodal_threshold = threshold;
         self.0.analysis = None;
@@ -775,6 +826,7 @@ struct LuAnalysis {
 /// [`SolveError::Singular`] at the first non-finite solution entry.
 pub struct FaerLu {
     analysis: Option<LuAnalysis>,
+    supernodal_threshold: f64,
     stats: SolverStats,
 }
 
@@ -789,12 +841,22 @@ impl FaerLu {
     pub fn new() -> Self {
         Self {
             analysis: None,
+            supernodal_threshold: DEFAULT_SUPERNODAL_THRESHOLD,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
                 last_true_residual: f64::NAN,
                 ..Default::default()
             },
         }
+    }
+
+    /// Sets faer's supernodal threshold (takes effect at the next analysis), as
+    /// [`FaerCholesky::with_supernodal_threshold`]; faer's LU measures the flops per entry
+    /// of L + U from the column elimination tree.
+    pub fn with_supernodal_threshold(mut self, threshold: f64) -> Self {
+        self.supernodal_threshold = threshold;
+        self.analysis = None;
+        self
     }
 }
 
@@ -816,7 +878,11 @@ impl LinearBackend for FaerLu {
         let n = pattern.n();
         let col_ptr = col_ptr_u32(pattern)?;
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, pattern.col_idx());
-        let symbolic = factorize_symbolic_lu(sym, Default::default()).map_err(faer_err)?;
+        let params = LuSymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold(self.supernodal_threshold),
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_lu(sym, params).map_err(faer_err)?;
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_transpose_in_place_scratch::<f64>(1, Par::Seq),

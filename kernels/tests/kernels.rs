@@ -501,6 +501,53 @@ fn unsymmetric_values_with_lu() {
     assert!(rel_err(&x, &xd) < 1e-14, "{x:?} {xd:?}");
 }
 
+/// The Cholesky backends take faer's supernodal factorization where the symbolic factor
+/// has more than `SUPERNODAL_FLOP_RATIO` (12) flops per entry (faer's measure: 1 + ours),
+/// below faer's own switch at 40 (kernels/src/faer_backend.rs; docs/performance.md,
+/// "Supernodal from a flop ratio of 12"); LLᵀ and LDLᵀ alike, and both give the dense
+/// solution.
+#[test]
+fn the_default_factorization_is_supernodal_from_a_flop_ratio_of_12() {
+    let threshold = dfem_kernels::faer_backend::SUPERNODAL_FLOP_RATIO;
+    let (mut below, mut between) = (false, false);
+    for (nx, ny) in [(3, 2), (6, 3), (12, 6), (24, 12)] {
+        let (_, p) = cst_problem(nx, ny, true);
+        let mut s = FaerCholesky::new();
+        assert_eq!(s.supernodal(), None);
+        s.factorize(&p.a).unwrap();
+        let st = s.stats();
+        let ratio = 1.0 + st.factor_flops / st.factor_nnz as f64;
+        assert_eq!(
+            s.supernodal(),
+            Some(ratio > threshold),
+            "{nx} x {ny}: ratio {ratio}"
+        );
+        below |= ratio < threshold;
+        between |= ratio > threshold && ratio < 40.0;
+        let mut l = FaerLdlt::new();
+        l.factorize(&p.a).unwrap();
+        assert_eq!(l.supernodal(), s.supernodal(), "{nx} x {ny}");
+        let xd = dense_solve(&p.a, &p.b);
+        let mut x = p.b.clone();
+        s.solve(&mut x).unwrap();
+        assert!(
+            rel_err(&x, &xd) < 1e-10,
+            "{nx} x {ny}: {:e}",
+            rel_err(&x, &xd)
+        );
+        eprintln!(
+            "{nx} x {ny}: n {} ratio {ratio:.1} supernodal {:?}",
+            p.a.pattern.n(),
+            s.supernodal()
+        );
+    }
+    // the cases cover both sides of the switch, and the range where faer's default differs
+    assert!(
+        below && between,
+        "below {below}, between 12 and 40 {between}"
+    );
+}
+
 #[test]
 fn non_positive_pivot_index_simplicial_and_supernodal() {
     let (_, p) = cst_problem(20, 10, true);

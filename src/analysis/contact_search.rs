@@ -30,6 +30,7 @@ use crate::geometry::joints::candidate_pairs;
 use crate::geometry::polygon::{bbox, contains, dot, norm, sub, Point};
 use crate::material::ContactState;
 use crate::mesh::{BlockDofs, Contact, Mesh};
+use std::collections::HashMap;
 
 /// A vertex-to-edge contact found, with its signed gap (m, > 0 open).
 #[derive(Debug, Clone, PartialEq)]
@@ -139,19 +140,25 @@ pub fn search(mesh: &Mesh, vel: &[Point], band: f64, reach: f64) -> Vec<Found> {
     let polys = boundaries(mesh);
     let fixed = |b: usize| mesh.blocks[b].dofs == BlockDofs::Fixed;
     let pairs = candidate_pairs(&polys, reach);
+    // the contacts of each pair of blocks, in one pass (a scan of every contact for each
+    // pair made the search quadratic: 30 % of a dynamic run of a 900-block wall)
+    let mut of_pair: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (k, c) in mesh.contacts.iter().enumerate() {
+        let key = (c.block_l.min(c.block_m), c.block_l.max(c.block_m));
+        of_pair.entry(key).or_default().push(k);
+    }
     let mut found: Vec<Found> = Vec::new();
     for (i, j) in pairs {
         if fixed(i) && fixed(j) {
             continue;
         }
         // points already in contact between these two blocks (m side's node positions)
-        let mut taken: Vec<Point> = mesh
-            .contacts
-            .iter()
-            .filter(|c| {
-                (c.block_l as usize, c.block_m as usize) == (i, j)
-                    || (c.block_l as usize, c.block_m as usize) == (j, i)
-            })
+        let key = (i.min(j) as u32, i.max(j) as u32);
+        let mut taken: Vec<Point> = of_pair
+            .get(&key)
+            .into_iter()
+            .flatten()
+            .map(|&k| &mesh.contacts[k])
             .flat_map(|c| {
                 [
                     mesh.nodes[c.node_m as usize],

@@ -135,13 +135,18 @@ fn main() {
                 };
                 let simp = time(make(f64::INFINITY).as_mut(), &a);
                 let sup = time(make(0.0).as_mut(), &a);
-                let dflt = time(make(DEFAULT_SUPERNODAL_THRESHOLD).as_mut(), &a);
-                // which variant the default took: faer's rule on its flop ratio (LU: its
-                // own measure of L + U, which faer does not expose)
-                let took = match (lu, sup.2 > SUPERNODAL_FLOP_RATIO) {
-                    (true, _) => "–",
-                    (false, true) => "supernodal",
-                    (false, false) => "simplicial",
+                // the default, and which kernel it took (the Cholesky backend's analysis
+                // says; faer's LU does not expose its choice)
+                let (dflt, took) = if lu {
+                    (time(make(DEFAULT_SUPERNODAL_THRESHOLD).as_mut(), &a), "–")
+                } else {
+                    let mut b = FaerCholesky::new().with_threads(threads);
+                    let t = time(&mut b, &a);
+                    let took = match b.supernodal() {
+                        Some(true) => "supernodal",
+                        _ => "simplicial",
+                    };
+                    (t, took)
                 };
                 let ms = |v: (f64, f64, f64)| format!("{:.3} / {:.3}", v.0 * 1e3, v.1 * 1e3);
                 println!(

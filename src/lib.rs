@@ -2,6 +2,8 @@
 //!
 //! Data flows one way (see `docs/` and the shared DESIGN.md):
 //! scene → geometry → mesh → assembly → linear backend (`dfem_kernels`) → analysis → output.
+// the `json!` of summary.json's statistics nests deeper than serde_json's default allows
+#![recursion_limit = "256"]
 
 pub mod analysis;
 pub mod assembly;

@@ -122,14 +122,28 @@ const OPEN_WEIGHT_DECAY: f64 = 0.1;
 /// voussoirs landing at 6 m/s on a band of 5 mm, see `Dynamics::too_fast`), reached only
 /// while they last (the step doubles back after each converged one).
 const MAX_CUTS: f64 = 12.0;
-/// Open/closed changes of a contact within a step of the smallest length (`max_cuts`
-/// halvings) after which it is held open for the rest of the step's iterations. A contact at the kink of its law (touching with a
-/// force near zero) can make the iterations cycle whatever its spring in the matrix:
-/// closed, the step carries it open; open, the step carries it closed. Held open, the
-/// step's problem is smooth and converges; the contact ends the step with the normal
-/// gap it reached (a penetration of at most the band, else the step is cut,
-/// `Dynamics::too_fast`), which the next step starts from with its state re-evaluated.
+/// Open/closed changes of a contact within a try of a step after which it is held open
+/// for the rest of the try's iterations: in a try of the smallest length (`max_cuts`
+/// halvings) whatever its force, in any other where it never carried more than
+/// [`HOLD_OPEN_FORCE`] of the step's force scale while closed. A contact at the kink of
+/// its law (touching with a force near zero) can make the iterations cycle whatever its
+/// spring in the matrix: closed, the step carries it open; open, the step carries it
+/// closed. Held open, the step's problem is smooth and converges; the contact ends the
+/// step with the normal gap it reached (a penetration of at most a tenth of the band,
+/// else the step is cut, `Dynamics::too_fast`), which the next step starts from with its
+/// state re-evaluated.
 const FREEZE_FLIPS: u32 = 6;
+/// The largest force (fraction of the step's force scale, `Balance::scale`) a contact
+/// may have carried closed within a try for [`FREEZE_FLIPS`] to hold it open at a step
+/// length above the smallest. Held open only at the smallest length, such contacts
+/// (0.1–1 N on voussoirs of tens of kN in the seed arch's collapse) stalled try after
+/// try, each halving the step down to it and the step doubling back after: on the
+/// arch's eight runs under Acc. No. 1 and No. 2 (docs/performance.md, "Chattering
+/// contacts held open") up to 13,287 tries given up in one run. Held open at any length
+/// whatever their force, a box landing on its base was launched (the held contact's
+/// penetration, up to a tenth of the band, returned as elastic energy): a contact that
+/// carries a force that matters is never held open above the smallest length.
+const HOLD_OPEN_FORCE: f64 = 1e-3;
 /// Penetration (fraction of the band thickness) a contact held open may end a step with
 /// before the step is cut, and the most a new contact starts with.
 const HELD_PENETRATION: f64 = 0.1;
@@ -1073,8 +1087,16 @@ impl<'a> Dynamics<'a> {
 
     /// Try one step of length h from the committed state; `None` when it does not
     /// converge (the caller cuts it). `last_resort`: the step cannot be cut further, and
-    /// contacts that cycle are held open ([`FREEZE_FLIPS`]).
-    fn step(&mut self, h: f64, last_resort: bool) -> Result<Option<Accepted>> {
+    /// contacts that cycle are held open ([`FREEZE_FLIPS`]). `start`: the increment of
+    /// the unknowns the iterations start from, in the trial's own contact states (the
+    /// answer of a first try of the same step, which [`Dynamics::advance_to`] redoes);
+    /// `None`: the committed state carried along by the ground, in the committed states.
+    fn step(
+        &mut self,
+        h: f64,
+        last_resort: bool,
+        start: Option<&[f64]>,
+    ) -> Result<Option<Accepted>> {
         let s = self.settings.scheme;
         let inertia = self.settings.inertia;
         // without inertia: backward Euler, v₁ = Δu/h, the balance taken at t₁
@@ -1122,7 +1144,10 @@ impl<'a> Dynamics<'a> {
         // start from the committed state carried along by the ground (the first solve is
         // the linearized step: a predictor that moves stiff contacts would start far
         // from the answer)
-        let mut dq: Vec<f64> = self.absolute_from_relative(&vec![0.0; n], dug);
+        let mut dq: Vec<f64> = match start {
+            Some(s) => s.to_vec(),
+            None => self.absolute_from_relative(&vec![0.0; n], dug),
+        };
         let mut trial = self.trial_moving(&dq, dug);
         let mut prev_state = trial.state.clone();
         let mut prev_force = trial.force.clone();
@@ -1135,6 +1160,8 @@ impl<'a> Dynamics<'a> {
             (b[2] - b[0]).hypot(b[3] - b[1]).max(1e-9)
         };
         let mut bal = self.balance(&terms, &dq, &trial);
+        // per contact, the largest force (N) it carried closed in this try's iterations
+        let mut closed_max = vec![0.0f64; trial.state.len()];
         // the out-of-balance norm of the last iteration (N), and whether its step was a
         // tangent one
         let mut last_rn = f64::INFINITY;
@@ -1170,7 +1197,13 @@ impl<'a> Dynamics<'a> {
                         1.0
                     };
                 }
-                if last_resort && flips[k] >= FREEZE_FLIPS && !frozen[k] {
+                if !open {
+                    closed_max[k] = closed_max[k].max(trial.force[k][0].hypot(trial.force[k][1]));
+                }
+                if (last_resort || closed_max[k] <= HOLD_OPEN_FORCE * bal.scale)
+                    && flips[k] >= FREEZE_FLIPS
+                    && !frozen[k]
+                {
                     if super::tracing() {
                         eprintln!("  hold open: contact {k}");
                     }
@@ -1244,7 +1277,7 @@ impl<'a> Dynamics<'a> {
             prev_force = trial.force.clone();
             // at the first iteration, the states of the last step (a contact exactly at
             // its friction limit evaluates as sticking, but it was slipping)
-            let states = if it == 0 {
+            let states = if it == 0 && start.is_none() {
                 &self.committed.state
             } else {
                 &trial.state
@@ -1724,7 +1757,7 @@ impl<'a> Dynamics<'a> {
         while self.time < target - 1e-9 * self.settings.dt {
             h = h.min(target - self.time);
             let last_resort = h <= hmin * (1.0 + 1e-9);
-            let mut accepted = self.step(h, last_resort)?;
+            let mut accepted = self.step(h, last_resort, None)?;
             let mut saved = None;
             if let Some(released) = accepted.as_ref().and_then(|acc| self.released(acc)) {
                 // contacts that carried force at the start let go within the step: their
@@ -1739,8 +1772,16 @@ impl<'a> Dynamics<'a> {
                     let k: Vec<usize> = (0..released.len()).filter(|&k| released[k]).collect();
                     eprintln!("  release redo: contacts {k:?}");
                 }
+                // the redo starts from the first try's answer, which differs from the
+                // redo's by the released contacts' small share of the start: 2–3
+                // iterations instead of the 5–7 of a start from rest (docs/performance.md,
+                // "The release redo from the first try")
+                let first = accepted.as_ref().map(|acc| acc.trial.dq.clone());
                 self.release(&released);
-                accepted = self.step(h, last_resort)?;
+                let before = self.stats.iterations;
+                accepted = self.step(h, last_resort, first.as_deref())?;
+                self.stats.release_redos += 1;
+                self.stats.release_redo_iterations += self.stats.iterations - before;
                 saved = Some(start);
             }
             // the local error of an error-controlled step, computed once for the cut and

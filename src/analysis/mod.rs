@@ -109,6 +109,12 @@ pub struct Stats {
     /// Converged time steps cut because their local error exceeded
     /// `adaptive_tolerance`.
     pub error_cuts: usize,
+    /// Time steps of a dynamic run redone because a contact that carried force at their
+    /// start let go within them (`impact_reset`, docs/theory.md §5), and the iterations
+    /// of those redos (included in `iterations`): each starts from the first try's
+    /// answer.
+    pub release_redos: usize,
+    pub release_redo_iterations: usize,
     pub wall_time_s: f64,
     pub min_pivot_ratio: f64,
     /// Stored entries of the last factor of the linear backend (its memory is 8 bytes

@@ -145,6 +145,8 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "held_open": s.held_open,
             "stalled_steps": s.stalled_steps,
             "error_cuts": s.error_cuts,
+            "release_redos": s.release_redos,
+            "release_redo_iterations": s.release_redo_iterations,
             "min_pivot_ratio": s.min_pivot_ratio,
             "factor_nnz": s.factor_nnz,
             "peak_memory_mb": s.peak_memory_mb,

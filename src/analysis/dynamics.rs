@@ -1432,6 +1432,12 @@ impl<'a> Dynamics<'a> {
             })
             .collect();
         let deformable = |b: usize| self.cur.blocks[b].dofs == BlockDofs::Deformable;
+        if !(0..at_trial.len()).any(deformable) {
+            // no triangles, whose geometry is all this chooses: the trial's, the one the
+            // contacts take, so that the damping matrix `balance` assembled for the trial
+            // serves the iteration matrix too (`Dynamics::effective_into`)
+            return Some(None);
+        }
         if !at_trial.contains(&true) {
             return None;
         }

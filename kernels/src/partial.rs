@@ -287,17 +287,30 @@ impl PartialLlt {
     /// Forward solve with \[L_II; L_BI\] in place on `v` (permuted order, length n):
     /// v_I ← y = L_II⁻¹ v_I and v_B ← v_B − L_BI y.
     pub(crate) fn forward(&self, l: &[f64], v: &mut [f64]) {
+        // the rows below each supernode, L_below x, as one dense product into `g` and one
+        // scatter (a scatter per column took 7 % of a deformable column's dynamic run)
+        let mut g = vec![0.0; self.sn.iter().map(|s| s.below.len()).max().unwrap_or(0)];
         for s in &self.sn {
             let blk = self.block(s, l);
             let (head, tail) = v.split_at_mut(s.begin + s.w);
             let x = &mut head[s.begin..];
             solve_lower_triangular_in_place(blk.subrows(0, s.w), col_mut(x), Par::Seq);
+            let nb = s.below.len();
+            if nb == 0 {
+                continue;
+            }
             let base = s.begin + s.w;
-            for (j, &xj) in x.iter().enumerate() {
-                let col = blk.col(j);
-                for (i, &r) in s.below.iter().enumerate() {
-                    tail[r as usize - base] -= col[s.w + i] * xj;
-                }
+            let g = &mut g[..nb];
+            matmul(
+                col_mut(g),
+                Accum::Replace,
+                blk.subrows(s.w, nb),
+                MatRef::from_column_major_slice(x, s.w, 1),
+                1.0,
+                Par::Seq,
+            );
+            for (&r, &gi) in s.below.iter().zip(g.iter()) {
+                tail[r as usize - base] -= gi;
             }
         }
     }
@@ -305,18 +318,28 @@ impl PartialLlt {
     /// Backward solve with \[L_II; L_BI\]ᵀ in place on `v` (permuted order): given
     /// v_B = x_B and v_I = y of [`PartialLlt::forward`], v_I ← L_IIᵀ⁻¹ (y − L_BIᵀ x_B).
     pub(crate) fn backward(&self, l: &[f64], v: &mut [f64]) {
+        // the rows below each supernode gathered once into `g`, then x −= L_belowᵀ g as
+        // one dense product (see `forward`)
+        let mut g = vec![0.0; self.sn.iter().map(|s| s.below.len()).max().unwrap_or(0)];
         for s in self.sn.iter().rev() {
             let blk = self.block(s, l);
             let (head, tail) = v.split_at_mut(s.begin + s.w);
             let x = &mut head[s.begin..];
-            let base = s.begin + s.w;
-            for (j, xj) in x.iter_mut().enumerate() {
-                let col = blk.col(j);
-                let mut sum = 0.0;
-                for (i, &r) in s.below.iter().enumerate() {
-                    sum += col[s.w + i] * tail[r as usize - base];
+            let nb = s.below.len();
+            if nb > 0 {
+                let base = s.begin + s.w;
+                let g = &mut g[..nb];
+                for (gi, &r) in g.iter_mut().zip(&s.below) {
+                    *gi = tail[r as usize - base];
                 }
-                *xj -= sum;
+                matmul(
+                    col_mut(x),
+                    Accum::Add,
+                    blk.subrows(s.w, nb).transpose(),
+                    MatRef::from_column_major_slice(g, nb, 1),
+                    -1.0,
+                    Par::Seq,
+                );
             }
             solve_upper_triangular_in_place(blk.subrows(0, s.w).transpose(), col_mut(x), Par::Seq);
         }

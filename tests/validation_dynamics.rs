@@ -906,10 +906,6 @@ fn a_release_redo_starts_from_the_first_try() {
         "{redo} a redo against {first} a first try"
     );
     // the bricks move by less than a millimetre: the wall stands in its joints
-    let umax = out
-        .node_disp
-        .iter()
-        .map(|d| d[0].hypot(d[1]))
-        .fold(0.0, f64::max);
+    let umax = common::largest_displacement(&out);
     assert!(umax < 1e-3, "{umax} m");
 }

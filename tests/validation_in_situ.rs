@@ -46,23 +46,16 @@ fn stack(in_situ: &str) -> String {
     s + in_situ
 }
 
-fn largest_displacement(out: &dfem::analysis::Outcome) -> f64 {
-    out.node_disp
-        .iter()
-        .map(|d| d[0].hypot(d[1]))
-        .fold(0.0, f64::max)
-}
-
 #[test]
 fn a_stack_in_its_own_in_situ_stress_does_not_move() {
     let (_, gravity) = common::solve(&common::scene(&stack("")));
     assert_eq!(gravity.status, Status::Stable);
-    let settled = largest_displacement(&gravity);
+    let settled = common::largest_displacement(&gravity);
     let (_, in_situ) = common::solve(&common::scene(&stack(
         "[in_situ]\ndatum = 5.0\nstress = [0.0, 0.0, 0.0]\ngradient = [0.0, 25e3, 0.0]\n",
     )));
     assert_eq!(in_situ.status, Status::Stable);
-    let moved = largest_displacement(&in_situ);
+    let moved = common::largest_displacement(&in_situ);
     eprintln!("gravity alone: {settled:.4e} m; from the in-situ stress: {moved:.4e} m");
     assert!(settled > 1e-6, "the stack settles under gravity: {settled}");
     assert!(
@@ -181,7 +174,7 @@ fn a_stack_in_its_own_in_situ_stress_stays_at_rest_in_a_dynamic_run() {
             );
     let (_, out) = common::solve(&common::scene(&text));
     assert_eq!(out.status, Status::Stable);
-    let moved = largest_displacement(&out);
+    let moved = common::largest_displacement(&out);
     eprintln!("from rest in the in-situ stress: {moved:.4e} m");
     // gravity alone settles the stack by 4.7 µm (the first test): 10⁻¹⁵ m is 2·10⁻¹⁰ of
     // it, round-off (measured 8·10⁻²⁰ m)

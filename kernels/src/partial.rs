@@ -60,6 +60,8 @@ pub(crate) struct PartialLlt {
     a_map: Vec<(usize, usize)>,
     /// Values used: the columns in I of every supernode.
     n_values: usize,
+    /// The most rows below a supernode (the length of the substitutions' work vector).
+    max_below: usize,
 }
 
 impl PartialLlt {
@@ -132,9 +134,11 @@ impl PartialLlt {
             a_map.push((s.off + (c - s.begin) * s.nrows + row, t));
         }
         let n_values = sn.iter().map(|s| s.w * s.nrows).sum();
+        let max_below = sn.iter().map(|s| s.below.len()).max().unwrap_or(0);
         Ok(Self {
             n_int,
             nb: n - n_int,
+            max_below,
             sn,
             sn_of,
             a_map,
@@ -289,7 +293,7 @@ impl PartialLlt {
     pub(crate) fn forward(&self, l: &[f64], v: &mut [f64]) {
         // the rows below each supernode, L_below x, as one dense product into `g` and one
         // scatter (a scatter per column took 7 % of a deformable column's dynamic run)
-        let mut g = vec![0.0; self.sn.iter().map(|s| s.below.len()).max().unwrap_or(0)];
+        let mut g = vec![0.0; self.max_below];
         for s in &self.sn {
             let blk = self.block(s, l);
             let (head, tail) = v.split_at_mut(s.begin + s.w);
@@ -320,7 +324,7 @@ impl PartialLlt {
     pub(crate) fn backward(&self, l: &[f64], v: &mut [f64]) {
         // the rows below each supernode gathered once into `g`, then x −= L_belowᵀ g as
         // one dense product (see `forward`)
-        let mut g = vec![0.0; self.sn.iter().map(|s| s.below.len()).max().unwrap_or(0)];
+        let mut g = vec![0.0; self.max_below];
         for s in self.sn.iter().rev() {
             let blk = self.block(s, l);
             let (head, tail) = v.split_at_mut(s.begin + s.w);

@@ -306,3 +306,11 @@ pub fn example_scene(name: &str, text: &str, dir: &std::path::Path) -> Option<Pa
     std::fs::write(&file, short).unwrap();
     Some(file)
 }
+
+/// The largest displacement of a node (m).
+pub fn largest_displacement(out: &Outcome) -> f64 {
+    out.node_disp
+        .iter()
+        .map(|d| d[0].hypot(d[1]))
+        .fold(0.0, f64::max)
+}

@@ -35,7 +35,7 @@
 //! or slipping: the band's dashpots act in parallel with its friction slider, so that the
 //! shear force is continuous at the onset of slip; none when it is open, nor over a step
 //! at whose start the contact carried no force, [`DASHPOT_FORCE`]), plus the optional
-//! Rayleigh a₀ M + a₁ K_s.
+//! Rayleigh a₀ M + a₁ K_s (K_s in the contact states at the step's start).
 //!
 //! Energy audit (J, all in the ground's frame): kinetic ½ vᵀMv; elastic energy of the
 //! blocks ½ ∫ σᵀ Dₑ⁻¹ σ and of the contacts ½ (Fₙ²/kₙ + Fₛ²/kₛ); viscous dissipation
@@ -1055,9 +1055,15 @@ impl<'a> Dynamics<'a> {
         let v1r = self.relative(&v1, vg1);
         let mut fv1: Vec<f64> = (0..n).map(|i| ra0 * self.mass[i] * v1r[i]).collect();
         if ra1 > 0.0 {
-            // stiffness-proportional damping with the secant stiffness of the trial states
+            // stiffness-proportional damping with the secant stiffness of the states at the
+            // step's start (the committed stiffness, as OpenSees' `betaKcomm`), on the
+            // trial's geometry: with the trial's states, a contact that changed between
+            // stick and slip or open and closed switched a₁ kₛ v̇ₛ or a₁ kₙ v̇ₙ on and off,
+            // and the iterations cycled about it (a rigid wall under El Centro failed
+            // within 0.02 s: docs/performance.md, "Rayleigh damping on the step's start
+            // states"); none from a contact with no force at the start (`DASHPOT_FORCE`)
             let local: Vec<LocalStiffness> = (0..self.springs.len())
-                .map(|c| secant_local(self.springs[c], trial.state[c]))
+                .map(|c| secant_local(self.springs[c], self.damped_state(c)))
                 .collect();
             self.system
                 .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
@@ -1473,6 +1479,17 @@ impl<'a> Dynamics<'a> {
         Some(Some(m))
     }
 
+    /// The state of contact `c` at the step's start as its damping sees it: the committed
+    /// one, open where the contact carried less than the step's [`DASHPOT_FORCE`] there.
+    fn damped_state(&self, c: usize) -> ContactState {
+        let [fn0, fs0] = self.committed.force[c];
+        if fn0.hypot(fs0) < self.dashpot_floor {
+            ContactState::Open
+        } else {
+            self.committed.state[c]
+        }
+    }
+
     /// The contacts' local dashpot matrices for the trial states `state`.
     fn dashpots(&self, state: &[ContactState]) -> Vec<LocalStiffness> {
         (0..self.visc.len())
@@ -1487,11 +1504,8 @@ impl<'a> Dynamics<'a> {
                 // solution at the kink that the iterations cycle around: open → closed
                 // with a dashpot force that reopens it → open)
                 // with no force at the step's start (`DASHPOT_FORCE`), none over the step
-                let [fn0, fs0] = self.committed.force[c];
-                let touching = fn0.hypot(fs0) < self.dashpot_floor;
-                let state = match (self.committed.state[c], state[c]) {
+                let state = match (self.damped_state(c), state[c]) {
                     (ContactState::Open, _) => ContactState::Open,
-                    _ if touching => ContactState::Open,
                     (_, ContactState::Slip) => ContactState::Stick,
                     (_, s) => s,
                 };

@@ -931,7 +931,7 @@ fn a_release_redo_starts_from_the_first_try() {
 /// with Rayleigh damping the run failed in its first steps (measured). A contact's damping is
 /// now taken in its state at the step's start, none where it carried no force there
 /// (`DASHPOT_FORCE`, docs/theory.md §5): the damped walls cost about what the dry one does
-/// (222 and 255 iterations, measured), and their loaded joints still dissipate.
+/// (222 and 212 iterations, measured), and their loaded joints still dissipate.
 #[test]
 fn damping_of_contacts_at_their_kinks_does_not_stall_the_steps() {
     let solve = |text: String| {
@@ -954,7 +954,7 @@ fn damping_of_contacts_at_their_kinks_does_not_stall_the_steps() {
         );
         assert_eq!(w.stalled_steps, 0, "{what}");
         assert!(
-            w.iterations as f64 <= 1.25 * d.iterations as f64,
+            w.iterations as f64 <= 1.1 * d.iterations as f64,
             "{} iterations with {what} against {} dry",
             w.iterations,
             d.iterations

@@ -1058,12 +1058,13 @@ impl<'a> Dynamics<'a> {
             // stiffness-proportional damping with the secant stiffness of the states at the
             // step's start (the committed stiffness, as OpenSees' `betaKcomm`), on the
             // trial's geometry: with the trial's states, a contact that changed between
-            // stick and slip or open and closed switched a₁ kₛ v̇ₛ or a₁ kₙ v̇ₙ on and off,
-            // and the iterations cycled about it (a rigid wall under El Centro failed
-            // within 0.02 s: docs/performance.md, "Rayleigh damping on the step's start
-            // states"); none from a contact with no force at the start (`DASHPOT_FORCE`)
+            // stick and slip switched a₁ kₛ v̇ₛ on and off, and the iterations cycled about
+            // it (a rigid wall under El Centro failed within 0.02 s: docs/performance.md,
+            // "Rayleigh damping on the step's start states"); none from a contact with no
+            // force at the start (`DASHPOT_FORCE`), nor across one open in the trial (no
+            // damping force across an open band, as for the dashpots)
             let local: Vec<LocalStiffness> = (0..self.springs.len())
-                .map(|c| secant_local(self.springs[c], self.damped_state(c)))
+                .map(|c| self.rayleigh_local(c, trial.state[c]))
                 .collect();
             self.system
                 .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
@@ -1490,6 +1491,16 @@ impl<'a> Dynamics<'a> {
         }
     }
 
+    /// The local stiffness (N/m) of contact `c` in the stiffness-proportional Rayleigh
+    /// term a₁ K of a trial in which it is in `state`: the secant one of its state at the
+    /// step's start ([`Dynamics::damped_state`]), none where it is open in the trial.
+    fn rayleigh_local(&self, c: usize, state: ContactState) -> LocalStiffness {
+        match state {
+            ContactState::Open => [[0.0; 2]; 2],
+            _ => secant_local(self.springs[c], self.damped_state(c)),
+        }
+    }
+
     /// The contacts' local dashpot matrices for the trial states `state`.
     fn dashpots(&self, state: &[ContactState]) -> Vec<LocalStiffness> {
         (0..self.visc.len())
@@ -1543,6 +1554,23 @@ impl<'a> Dynamics<'a> {
         let [ra0, ra1] = self.settings.rayleigh;
         let StepTerms { am, af, c0, .. } = *terms;
         let c1 = terms.gamma / (terms.beta * terms.h);
+        // the Rayleigh term's contacts in the states `balance` takes them in (the start's):
+        // K(local) scaled by (1 + c₁ a₁) below, so the contacts enter as
+        // (local + c₁ a₁ K_R) / (1 + c₁ a₁), the blocks' triangles as (1 + c₁ a₁) K
+        let with_rayleigh: Vec<LocalStiffness>;
+        let local = if ra1 > 0.0 {
+            let w = c1 * ra1;
+            with_rayleigh = (0..local.len())
+                .map(|c| {
+                    let r = self.rayleigh_local(c, state[c]);
+                    let l = local[c];
+                    [0, 1].map(|i| [0, 1].map(|j| (l[i][j] + w * r[i][j]) / (1.0 + w)))
+                })
+                .collect();
+            &with_rayleigh
+        } else {
+            local
+        };
         let out = if second {
             self.tbuf
                 .get_or_insert_with(|| CsrMatrix::zeros(self.kbuf.pattern.clone()))

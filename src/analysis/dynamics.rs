@@ -149,7 +149,8 @@ const FREEZE_FLIPS: u32 = 6;
 const HOLD_OPEN_FORCE: f64 = 1e-3;
 /// The least force (fraction of the step's force scale at its start, as
 /// [`HOLD_OPEN_FORCE`]) a contact closed at a step's start must carry there for its
-/// dashpots to act over the step. A contact that touches with no force (the head joints
+/// dashpots, and its share of Rayleigh's a₁ K ([`Dynamics::rayleigh_local`]), to act over
+/// the step. A contact that touches with no force (the head joints
 /// of a running-bond wall under gravity) sits at the kink of its law: with its dashpots
 /// engaged while the trial is closed, the force jumps by cₙ v̇ₙ and cₛ v̇ₛ each time the
 /// iterations carry it across δₙ = 0, a law with no solution there that the iterations
@@ -406,9 +407,8 @@ pub struct Dynamics<'a> {
     springs: Vec<ContactSprings>,
     /// Contact viscosities (cₙ, cₛ) (N·s/m).
     visc: Vec<ContactSprings>,
-    /// The least force (N) a contact carries at a step's start for its dashpots to act
-    /// in that step ([`DASHPOT_FORCE`] of the step's force scale; set by
-    /// [`Dynamics::step`]).
+    /// The least force (N) a contact carries at a step's start for its damping to act in
+    /// that step ([`DASHPOT_FORCE`] of the step's force scale; set by [`Dynamics::step`]).
     dashpot_floor: f64,
     area: Vec<f64>,
     cur: Mesh,

@@ -925,7 +925,7 @@ fn a_release_redo_starts_from_the_first_try() {
 /// 1940 N-S: dry, with dashpots on its joints (Eₙ* = 5·10⁵, Gₛ* = 2.5·10⁵ Pa·s), and with
 /// stiffness-proportional Rayleigh damping (a₁ = 0.002 s). Its head joints touch with no
 /// force under gravity, and other joints sit at their friction limit. With their damping
-/// taken in the trial's states, the force jumped by cₛ v̇ₛ (or a₁ kₙ v̇ₙ, a₁ kₛ v̇ₛ) each time
+/// taken in the trial's states, the force jumped by cₛ δ̇ₛ (or a₁ kₙ δ̇ₙ, a₁ kₛ δ̇ₛ) each time
 /// an iteration carried a contact across a kink of its law, and the steps cycled: with
 /// dashpots 507 iterations, 3 stalled tries and 25 contacts held open, against 227 dry;
 /// with Rayleigh damping the run failed in its first steps (measured). A contact's damping is

@@ -152,7 +152,7 @@ const HOLD_OPEN_FORCE: f64 = 1e-3;
 /// dashpots, and its share of Rayleigh's a₁ K ([`Dynamics::rayleigh_local`]), to act over
 /// the step. A contact that touches with no force (the head joints
 /// of a running-bond wall under gravity) sits at the kink of its law: with its dashpots
-/// engaged while the trial is closed, the force jumps by cₙ v̇ₙ and cₛ v̇ₛ each time the
+/// engaged while the trial is closed, the force jumps by cₙ δ̇ₙ and cₛ δ̇ₛ each time the
 /// iterations carry it across δₙ = 0, a law with no solution there that the iterations
 /// cycle around, whatever the step (with the joints' dashpots of
 /// docs/performance.md, "Dashpots of contacts that carry no force", a rigid 30 × 30 wall
@@ -1058,7 +1058,7 @@ impl<'a> Dynamics<'a> {
             // stiffness-proportional damping with the secant stiffness of the states at the
             // step's start (the committed stiffness, as OpenSees' `betaKcomm`), on the
             // trial's geometry: with the trial's states, a contact that changed between
-            // stick and slip switched a₁ kₛ v̇ₛ on and off, and the iterations cycled about
+            // stick and slip switched a₁ kₛ δ̇ₛ on and off, and the iterations cycled about
             // it (a rigid wall under El Centro failed within 0.02 s: docs/performance.md,
             // "Rayleigh damping on the step's start states"); none from a contact with no
             // force at the start (`DASHPOT_FORCE`), nor across one open in the trial (no

@@ -103,6 +103,10 @@ pub struct Stats {
     /// Contacts of a dynamic run held open for the rest of a time step after cycling
     /// between open and closed in its iterations.
     pub held_open: usize,
+    /// Iterations of the static analysis of gravity that gave a dynamic run its start
+    /// (`initial = "equilibrium"`, [`dynamics::Start::Equilibrium`]; 0 where the elastic
+    /// start was already in balance). Not in `iterations`.
+    pub static_start_iterations: usize,
     /// Tries of a dynamic time step given up and cut after the dynamic driver's
     /// `STALL_ITERATIONS` (20) iterations without progress (before `max_iterations`).
     pub stalled_steps: usize,

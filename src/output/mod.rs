@@ -144,6 +144,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
             "impact_cuts": s.impact_cuts,
             "held_open": s.held_open,
             "stalled_steps": s.stalled_steps,
+            "static_start_iterations": s.static_start_iterations,
             "error_cuts": s.error_cuts,
             "release_redos": s.release_redos,
             "release_redo_iterations": s.release_redo_iterations,

@@ -439,9 +439,11 @@ pub fn deformed(path: &Path, fig: &Deformed, amp: Option<f64>, format: Format) -
     Ok(amp)
 }
 
-/// A number for a label: plain for moderate magnitudes, scientific otherwise.
+/// A number for a label: plain for moderate magnitudes, scientific otherwise; a tick
+/// within 10⁻⁹ of the axis' `range` of zero is zero (the tick positions' round-off
+/// drew "-3.39e-21" on the tunnel's history).
 fn fmt_num(v: f64, range: f64) -> String {
-    if v == 0.0 {
+    if v.abs() <= 1e-9 * range.abs() {
         "0".into()
     } else if (1e-2..1e4).contains(&range) {
         let digits = (2.0 - range.log10().floor()).clamp(0.0, 6.0) as usize;
@@ -927,6 +929,16 @@ pub(crate) fn draw_atomic(path: &Path, draw: impl FnOnce(&Path) -> Result<()>) -
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Tick labels: a tick that round-off put a hair off zero reads "0"; small and large
+    /// ranges in scientific notation, moderate ones plain.
+    #[test]
+    fn tick_labels_read_zero_at_zero() {
+        assert_eq!(fmt_num(-3.39e-21, 7e-5), "0");
+        assert_eq!(fmt_num(-5.0e-6, 7e-5), "-5.00e-6");
+        assert_eq!(fmt_num(0.25, 1.0), "0.25");
+        assert_eq!(fmt_num(-1e-12, 1.0), "0");
+    }
 
     #[test]
     fn rings_of_two_triangles_form_one_square() {

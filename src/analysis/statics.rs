@@ -517,13 +517,6 @@ const REUSE_TOLERANCE: f64 = 1e-10;
 /// open and slip in waves, still gain 10 % within 60 iterations (the 30×30 wall of
 /// docs/performance.md: its slowest increment improves by that in at most 25).
 const STALL_ITERATIONS: usize = 60;
-/// The stall window of the tangent steps that a stalled secant increment goes on with
-/// (`tangent_fallbacks`): tangent steps that do not lower the out-of-balance norm by
-/// [`STALL_PROGRESS`] within this many iterations will not converge either. A capacity
-/// search brackets λ with increments that fail; with the secant's 60 iterations again
-/// each failing increment paid two windows (the single blocks of docs/stress.md: 611 →
-/// 1,113 iterations when the fallback came).
-const TANGENT_STALL_ITERATIONS: usize = 20;
 /// A bonded contact that has changed between closed and open this many times in an
 /// increment's iterations breaks ([`Driver::break_cycling_bonds`]): closed → open →
 /// closed → open.
@@ -1420,13 +1413,7 @@ impl<'a> Driver<'a> {
             if rn < STALL_PROGRESS * best_rn {
                 best_rn = rn;
                 best_it = it;
-            } else if it - best_it
-                >= if tangent_only {
-                    TANGENT_STALL_ITERATIONS
-                } else {
-                    STALL_ITERATIONS
-                }
-            {
+            } else if it - best_it >= STALL_ITERATIONS {
                 if self.settings.strategy == Strategy::Secant && !tangent_only {
                     // the secant iterations stagnate, which on large walls they do below
                     // the limit load, a little above the tolerance (docs/performance.md,

@@ -613,6 +613,9 @@ fn turns(from: &Mesh, to: &Mesh) -> Vec<f64> {
 }
 
 impl<'a> Dynamics<'a> {
+    /// The driver of the scene's dynamic analysis, its state still all zero: a run
+    /// starts it with [`Dynamics::start`] or restores a checkpoint
+    /// ([`Dynamics::restore`]).
     pub fn new(
         scene: &'a Scene,
         mesh: &'a Mesh,
@@ -661,7 +664,7 @@ impl<'a> Dynamics<'a> {
             })
             .collect();
         let n = mesh.n_dofs;
-        let mut d = Dynamics {
+        Ok(Dynamics {
             scene,
             mesh0: mesh,
             settings,
@@ -701,28 +704,38 @@ impl<'a> Dynamics<'a> {
             time: 0.0,
             ground_u: [0.0; 2],
             ground_v: [0.0; 2],
-        };
-        if d.scene.in_situ.is_some() {
-            d.start_from_committed();
+        })
+    }
+
+    /// The state at t = 0 (`initial`, [`Start`]): the in-situ state, the elastic or
+    /// static equilibrium of gravity, and the initial acceleration. Not needed by a run
+    /// resumed from a checkpoint, which [`Dynamics::restore`] sets whole (a static start
+    /// would be computed for nothing).
+    pub fn start(&mut self) -> Result<()> {
+        let n = self.cur.n_dofs;
+        if self.scene.in_situ.is_some() {
+            self.start_from_committed();
         }
-        if d.settings.start != Start::Rest {
+        if self.settings.start != Start::Rest {
             // the geometry before the elastic predictor, only where a static analysis
             // may start from it
-            let initial = (d.settings.start == Start::Equilibrium).then(|| d.cur.clone());
-            d.preload()?;
+            let initial = (self.settings.start == Start::Equilibrium).then(|| self.cur.clone());
+            self.preload()?;
             if let Some(initial) = initial {
-                d.settle(&initial);
+                self.settle(&initial);
             }
         }
-        let f0 = d.f_ext(0.0);
-        if d.settings.inertia {
-            d.a = (0..n).map(|i| (f0[i] - d.f_int[i]) / d.mass[i]).collect();
-            d.a = d.absolute_from_relative(&d.a, d.ground(0.0));
+        let f0 = self.f_ext(0.0);
+        if self.settings.inertia {
+            self.a = (0..n)
+                .map(|i| (f0[i] - self.f_int[i]) / self.mass[i])
+                .collect();
+            self.a = self.absolute_from_relative(&self.a, self.ground(0.0));
         }
-        if d.settings.start != Start::Rest && d.settings.inertia {
-            d.filtered_acceleration();
+        if self.settings.start != Start::Rest && self.settings.inertia {
+            self.filtered_acceleration();
         }
-        Ok(d)
+        Ok(())
     }
 
     /// The acceleration of the committed state seen by the next step:
@@ -2188,6 +2201,7 @@ pub fn run_from(
             d.restore(c)
         }
         None => {
+            d.start()?;
             d.update_contacts();
             0
         }

@@ -12,8 +12,9 @@
 //!   vertex-to-edge contact ([`Contact::along`]) unless a contact between the same two
 //!   blocks already sits within the band of it. A vertex on an end of a segment with no
 //!   side of its own along the segment is a corner on a corner and not taken on that
-//!   segment (where joints cross, the blocks diagonal to each other touch only there). A block landing flat on an edge gets
-//!   contacts at the vertices of the common stretch, so the edge-to-edge case of
+//!   segment (where joints cross, the blocks diagonal to each other touch only there).
+//!   A block landing flat on an edge gets contacts at the vertices of the common
+//!   stretch, so the edge-to-edge case of
 //!   [`crate::geometry::touching`] is the union of vertex-to-edge cases.
 //!
 //! Tributary length (the contact area is length × thickness, METHOD.md §3): half of each

@@ -439,11 +439,17 @@ pub fn deformed(path: &Path, fig: &Deformed, amp: Option<f64>, format: Format) -
     Ok(amp)
 }
 
-/// A number for a label: plain for moderate magnitudes, scientific otherwise; a tick
-/// within 10⁻⁹ of the axis' `range` of zero is zero (the tick positions' round-off
-/// drew "-3.39e-21" on the tunnel's history).
+/// Whether tick value `v` on an axis spanning `range` is zero but for the tick
+/// positions' round-off (within 10⁻⁹ of the range: the tunnel's history drew
+/// "-3.39e-21").
+pub(crate) fn zero_tick(v: f64, range: f64) -> bool {
+    v.abs() <= 1e-9 * range.abs()
+}
+
+/// A number for a label: plain for moderate magnitudes, scientific otherwise, "0" for a
+/// [`zero_tick`].
 fn fmt_num(v: f64, range: f64) -> String {
-    if v.abs() <= 1e-9 * range.abs() {
+    if zero_tick(v, range) {
         "0".into()
     } else if (1e-2..1e4).contains(&range) {
         let digits = (2.0 - range.log10().floor()).clamp(0.0, 6.0) as usize;

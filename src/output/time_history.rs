@@ -117,9 +117,8 @@ fn draw<DB: DrawingBackend>(
             .configure_mesh()
             .x_desc("time t, s")
             .y_desc(format!("{comp}, m"))
-            // a tick a hair off zero by round-off reads 0, not "-3.39e-21"
             .y_label_formatter(&|v| {
-                if v.abs() <= 1e-9 * (y1 - y0) {
+                if super::figures::zero_tick(*v, y1 - y0) {
                     "0".to_string()
                 } else {
                     format!("{v:.2e}")

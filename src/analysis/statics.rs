@@ -316,6 +316,10 @@ pub struct Driver<'a> {
     /// increment: the increment's later tangent steps do not try it again
     /// ([`Driver::tangent_with_secant_factor`]).
     gmres_failed: bool,
+    /// The increment iterated is a capacity search's probe of the load factor, which
+    /// stops at shorter stall windows ([`Driver::stall_window`]); the failure that closes
+    /// the search's bracket is iterated again with the full ones.
+    probing: bool,
     /// Out-of-balance norm (N) that counts as converged in the current iteration
     /// (tolerance × the force scale): a tangent correction by GMRES is solved to a tenth of
     /// it ([`Driver::tangent_with_secant_factor`]).
@@ -517,6 +521,13 @@ const REUSE_TOLERANCE: f64 = 1e-10;
 /// open and slip in waves, still gain 10 % within 60 iterations (the 30×30 wall of
 /// docs/performance.md: its slowest increment improves by that in at most 25).
 const STALL_ITERATIONS: usize = 60;
+/// The stall windows of a capacity search's probes ([`Driver::stall_window`]): secant
+/// iterations, then tangent steps. Half the secant window still covers the slowest
+/// converging increment measured near the limit (10 % gained within 25 iterations, the
+/// 30×30 wall above); a probe that fails within them only narrows the bracket, and the
+/// failure that closes it is confirmed with the full windows.
+const PROBE_STALL_ITERATIONS: usize = 30;
+const PROBE_TANGENT_STALL_ITERATIONS: usize = 10;
 /// A bonded contact that has changed between closed and open this many times in an
 /// increment's iterations breaks ([`Driver::break_cycling_bonds`]): closed → open →
 /// closed → open.
@@ -598,6 +609,7 @@ impl<'a> Driver<'a> {
             held_current: false,
             held_on_cur: Vec::new(),
             gmres_failed: false,
+            probing: false,
             converged_norm: 0.0,
             scale_floor: 0.0,
             stats: Stats {
@@ -1102,6 +1114,19 @@ impl<'a> Driver<'a> {
         Some(out.x)
     }
 
+    /// Iterations without a gain of [`STALL_PROGRESS`] after which an increment's secant
+    /// iterations (`tangent = false`) go on with tangent steps, or its tangent steps stop
+    /// as not converged: [`STALL_ITERATIONS`] for both, or in a capacity search's probes
+    /// ([`Driver::probing`]) [`PROBE_STALL_ITERATIONS`] and
+    /// [`PROBE_TANGENT_STALL_ITERATIONS`].
+    fn stall_window(&self, tangent: bool) -> usize {
+        match (self.probing, tangent) {
+            (false, _) => STALL_ITERATIONS,
+            (true, false) => PROBE_STALL_ITERATIONS,
+            (true, true) => PROBE_TANGENT_STALL_ITERATIONS,
+        }
+    }
+
     /// Contacts whose state in `now` differs from that of the held secant factorization;
     /// `None` when no secant factorization is held.
     fn changed_since_factor(&self, now: &[ContactState]) -> Option<usize> {
@@ -1413,7 +1438,7 @@ impl<'a> Driver<'a> {
             if rn < STALL_PROGRESS * best_rn {
                 best_rn = rn;
                 best_it = it;
-            } else if it - best_it >= STALL_ITERATIONS {
+            } else if it - best_it >= self.stall_window(tangent_only) {
                 if self.settings.strategy == Strategy::Secant && !tangent_only {
                     // the secant iterations stagnate, which on large walls they do below
                     // the limit load, a little above the tolerance (docs/performance.md,
@@ -1422,6 +1447,13 @@ impl<'a> Driver<'a> {
                     // declaring the load beyond what the contacts can hold
                     tangent_only = true;
                     self.stats.tangent_fallbacks += 1;
+                    if super::tracing() {
+                        eprintln!(
+                            "  secant stalled at it {it}: best {:.3e}, now {:.3e}: tangent steps",
+                            best_rn / scale,
+                            rn / scale
+                        );
+                    }
                     best_it = it;
                 } else if !bonds_broken && self.break_cycling_bonds(&open_flips) {
                     // the iterations cycled on bonds that cannot hold: go on with them
@@ -1436,6 +1468,13 @@ impl<'a> Driver<'a> {
                     continue;
                 } else {
                     // stagnation: the load is beyond what the contacts can hold from here
+                    if super::tracing() {
+                        eprintln!(
+                            "  stalled at it {it}: best {:.3e}, now {:.3e} (tangent steps: {tangent_only})",
+                            best_rn / scale,
+                            rn / scale
+                        );
+                    }
                     break;
                 }
             }
@@ -2514,22 +2553,32 @@ pub fn run_with_progress<'a>(
             // Raise λ in increments; an increment that fails sets the upper bound and is
             // cut. A failure from a distant state is not proof of collapse (the path of
             // slips matters), so the upper bound is retried from the closer states and
-            // dropped when reached. Stops when the bracket [λ, upper] is narrow enough.
+            // dropped when reached. Stops when the bracket [λ, upper] is narrow enough and
+            // its upper bound failed with the full stall windows: the increments are probes
+            // that give up sooner ([`Driver::stall_window`]), and where the bracket is
+            // narrow but its bound failed as a probe, that bound is iterated again with the
+            // full windows from λ (where it then converges, the search goes on above it).
+            // `upper_full`: the failure that set `upper` had the full windows.
+            let mut upper_full = false;
             loop {
                 let narrow = upper.is_finite()
                     && upper - lambda
                         <= d.settings.bracket * lambda.max(d.settings.initial_step * 1e-3);
-                if narrow || step <= 1e-12 * d.settings.initial_step || lambda > limit {
+                if (narrow && upper_full)
+                    || step <= 1e-12 * d.settings.initial_step
+                    || lambda > limit
+                {
                     break;
                 }
                 // a step that ends within round-off of the upper bound retries that bound
                 // itself: converging a hair below it would leave it standing as a bound
                 // that only a failure from a distant state set (a zero-width bracket)
-                let target = if lambda + step >= upper * (1.0 - 1e-12) {
+                let target = if narrow || lambda + step >= upper * (1.0 - 1e-12) {
                     upper
                 } else {
                     lambda + step
                 };
+                d.probing = !narrow;
                 let f: Vec<f64> = f_base
                     .iter()
                     .zip(&f_lat)
@@ -2561,6 +2610,11 @@ pub fn run_with_progress<'a>(
                     }
                     Err((why, dq)) => {
                         d.failure_mode = Some(dq);
+                        if target < upper {
+                            upper_full = !d.probing;
+                        } else {
+                            upper_full |= !d.probing;
+                        }
                         upper = upper.min(target);
                         last_fail = Some(describe(&why));
                         step = 0.5 * (target - lambda);

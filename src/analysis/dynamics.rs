@@ -54,6 +54,7 @@
 use super::checkpoint::Checkpoint;
 use super::config::{evaluate, secant_local, tangent_local, Committed, Trial};
 use super::contact_search;
+use super::statics::OpenFlips;
 use super::{fit_motion, Outcome, Stats, Status};
 use crate::assembly::{loads, mass, LocalStiffness, System};
 use crate::geometry::polygon::Point;
@@ -431,6 +432,10 @@ pub struct Dynamics<'a> {
     area: Vec<f64>,
     cur: Mesh,
     committed: Committed,
+    /// The bonds broken in the current try of a step ([`Dynamics::break_cycling_bonds`]),
+    /// with the history each had: restored when the try fails, so that a cut step starts
+    /// from the committed state as it was.
+    bonds_broken_here: Vec<(usize, crate::material::History)>,
     /// Velocity (m/s, rad/s) and acceleration (m/s², rad/s²) of the unknowns.
     v: Vec<f64>,
     a: Vec<f64>,
@@ -684,6 +689,7 @@ impl<'a> Dynamics<'a> {
                 Some(f) => Committed::in_situ(mesh, f, scene.model.thickness),
                 None => Committed::zero(mesh),
             },
+            bonds_broken_here: Vec::new(),
             v: vec![0.0; n],
             a: vec![0.0; n],
             f_int: vec![0.0; n],
@@ -1206,6 +1212,23 @@ impl<'a> Dynamics<'a> {
         }
     }
 
+    /// Breaks the bonds of the contacts that changed between closed and open at least
+    /// `BOND_BREAK_FLIPS` (3) times in a try's iterations, counted where they carried a
+    /// force that matters on one side (`flips`, [`OpenFlips`]), not held open
+    /// (`frozen`), whose bond is intact: the try stalled cycling between a closed
+    /// contact with its cohesion and an open one without, which is the jump of the
+    /// brittle bond's law at zero normal force (the bond cannot hold there, as in the
+    /// static driver's `Driver::break_cycling_bonds`). Whether any broke.
+    fn break_cycling_bonds(&mut self, flips: &OpenFlips, frozen: &[bool]) -> bool {
+        let law = &self.law;
+        flips.break_bonds(
+            &mut self.committed.history,
+            |_, h| law.broken_bond(h),
+            |k| frozen[k],
+            &mut self.bonds_broken_here,
+        )
+    }
+
     /// Try one step of length h from the committed state; `None` when it does not
     /// converge (the caller cuts it). `last_resort`: the step cannot be cut further, and
     /// contacts that cycle are held open ([`FREEZE_FLIPS`]). `start`: the increment of
@@ -1213,6 +1236,25 @@ impl<'a> Dynamics<'a> {
     /// answer of a first try of the same step, which [`Dynamics::advance_to`] redoes);
     /// `None`: the committed state carried along by the ground, in the committed states.
     fn step(
+        &mut self,
+        h: f64,
+        last_resort: bool,
+        start: Option<&[f64]>,
+    ) -> Result<Option<Accepted>> {
+        let out = self.try_step(h, last_resort, start);
+        if matches!(out, Ok(Some(_))) {
+            self.stats.bonds_broken += self.bonds_broken_here.len();
+            self.bonds_broken_here.clear();
+        } else {
+            for (k, h) in self.bonds_broken_here.drain(..).rev() {
+                self.committed.history[k] = h;
+            }
+        }
+        out
+    }
+
+    /// The iterations of [`Dynamics::step`].
+    fn try_step(
         &mut self,
         h: f64,
         last_resort: bool,
@@ -1290,8 +1332,15 @@ impl<'a> Dynamics<'a> {
         let mut last_tangent = false;
         // the best out-of-balance norm so far (N) and the iteration that set it
         let (mut best_rn, mut best_it) = (f64::INFINITY, 0);
+        let mut bonds_broken = false;
+        // the closed ↔ open changes that break bonds, counted only where the joints have a
+        // bond to break and the contact carries a force that matters on one side
+        let bonded = self.law.broken_bond([0.0; 2]).is_some();
+        let mut open_flips = OpenFlips::new(bonded, trial.state.len());
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
+            let negligible = self.settings.tolerance * bal.scale;
+            open_flips.count(it, &trial, (&prev_state, &prev_force), negligible);
             // secant stiffness and damping of the trial states (the contacts in the trial
             // geometry, the blocks as `effective_into` says). A contact that keeps opening
             // and closing within the step sits at the kink of its law (touching with no
@@ -1389,6 +1438,20 @@ impl<'a> Dynamics<'a> {
             if bal.rn < STALL_PROGRESS * best_rn {
                 (best_rn, best_it) = (bal.rn, it);
             } else if !last_resort && it - best_it >= STALL_ITERATIONS {
+                if !bonds_broken && self.break_cycling_bonds(&open_flips, &frozen) {
+                    // the iterations cycled on bonds that cannot hold: go on with them
+                    // broken (once a try, as the static driver does)
+                    bonds_broken = true;
+                    trial = self.trial_moving(&dq, dug);
+                    if frozen.iter().any(|&f| f) {
+                        hold_open(&mut trial, &frozen);
+                    }
+                    bal = self.balance(&terms, &dq, &trial);
+                    (best_rn, best_it) = (f64::INFINITY, it);
+                    prev_state = trial.state.clone();
+                    prev_force = trial.force.clone();
+                    continue;
+                }
                 if super::tracing() {
                     eprintln!("  stalled: no progress since iteration {best_it}");
                 }

@@ -530,7 +530,8 @@ const PROBE_STALL_ITERATIONS: usize = 30;
 const PROBE_TANGENT_STALL_ITERATIONS: usize = 10;
 /// A bonded contact that has changed between closed and open this many times in an
 /// increment's iterations breaks ([`Driver::break_cycling_bonds`]): closed → open →
-/// closed → open.
+/// closed → open. The dynamic driver breaks them likewise where a try stalls
+/// (`Dynamics::break_cycling_bonds`).
 const BOND_BREAK_FLIPS: u32 = 3;
 /// Step lengths 1, ½, ¼, ⅛ of the line search on the out-of-balance norm.
 const LINE_SEARCH_STEPS: usize = 4;
@@ -1357,21 +1358,13 @@ impl<'a> Driver<'a> {
             .laws
             .iter()
             .any(|l| l.broken_bond([0.0; 2]).is_some());
-        let mut open_flips = vec![0u32; if bonded { trial.state.len() } else { 0 }];
+        let mut open_flips = OpenFlips::new(bonded, trial.state.len());
         let mut bonds_broken = false;
         self.gmres_failed = false;
         for it in 0..self.settings.max_iterations {
             self.stats.iterations += 1;
-            if it > 0 && bonded {
-                let negligible = self.settings.tolerance * scale;
-                count_open_flips(
-                    &trial,
-                    &prev_state,
-                    &prev_force,
-                    negligible,
-                    &mut open_flips,
-                );
-            }
+            let negligible = self.settings.tolerance * scale;
+            open_flips.count(it, &trial, (&prev_state, &prev_force), negligible);
             let r = self.out_of_balance(f_ext, &trial.f_int);
             if !self.pins.is_empty() {
                 scale = self.force_scale(f_ext, &trial.f_int);
@@ -1689,7 +1682,7 @@ impl<'a> Driver<'a> {
 
     /// Breaks the bonds that cannot hold, where an increment's iterations stalled: every
     /// bonded contact (cohesion or tensile strength, intact) that went closed → open →
-    /// closed → open ([`BOND_BREAK_FLIPS`], `open_flips`: [`count_open_flips`]) in them
+    /// closed → open ([`BOND_BREAK_FLIPS`], `open_flips`: [`OpenFlips`]) in them
     /// has its bond broken for good from there on (docs/theory.md, "Bonds that cannot
     /// hold"). Such a contact sits at the jump of its law: closed it carries a cohesive
     /// shear that its equilibrium holds only with the contact in tension, past its
@@ -1699,23 +1692,16 @@ impl<'a> Driver<'a> {
     /// where the brittle law says the bond has broken. Only where the increment would
     /// otherwise fail, so that a run whose increments converge is not changed. Returns
     /// whether a bond broke (the trial must then be evaluated again).
-    fn break_cycling_bonds(&mut self, open_flips: &[u32]) -> bool {
-        let mut broke = false;
-        for (k, &flips) in open_flips.iter().enumerate() {
-            if flips < BOND_BREAK_FLIPS || k >= self.committed.history.len() {
-                continue;
-            }
-            let before = self.committed.history[k];
-            if let Some(broken) = self.law.get(k).broken_bond(before) {
-                if super::tracing() {
-                    eprintln!("  bond broken: contact {k} after {flips} changes");
-                }
-                self.committed.history[k] = broken;
-                self.bonds_broken_here.push((k, before));
-                self.stats.bonds_broken += 1;
-                broke = true;
-            }
-        }
+    fn break_cycling_bonds(&mut self, open_flips: &OpenFlips) -> bool {
+        let before = self.bonds_broken_here.len();
+        let law = &self.law;
+        let broke = open_flips.break_bonds(
+            &mut self.committed.history,
+            |k, h| law.get(k).broken_bond(h),
+            |_| false,
+            &mut self.bonds_broken_here,
+        );
+        self.stats.bonds_broken += self.bonds_broken_here.len() - before;
         broke
     }
 
@@ -2647,23 +2633,68 @@ pub fn run_with_progress<'a>(
     }
 }
 
-/// Counts, per contact, the changes between closed and open from the last iteration's
-/// states `prev_state` (forces `prev_force`) to `trial`'s, where the contact carries a
-/// force above `negligible` (N) on one side ([`Driver::break_cycling_bonds`]).
-fn count_open_flips(
-    trial: &Trial,
-    prev_state: &[ContactState],
-    prev_force: &[[f64; 2]],
-    negligible: f64,
-    open_flips: &mut [u32],
-) {
-    let matters = |f: [f64; 2]| f[0].hypot(f[1]) > negligible;
-    for (k, flips) in open_flips.iter_mut().enumerate() {
-        let open = trial.state[k] == ContactState::Open;
-        if open != (prev_state[k] == ContactState::Open)
-            && (matters(trial.force[k]) || matters(prev_force[k]))
-        {
-            *flips += 1;
+/// Per contact, the changes between closed and open in the iterations of an increment
+/// (or of a try of a time step), counted where the contact carries a force that matters
+/// on one side: what breaks the bonds that cannot hold ([`BOND_BREAK_FLIPS`],
+/// [`Driver::break_cycling_bonds`] and the dynamic driver's
+/// `Dynamics::break_cycling_bonds`). Empty, counting nothing, where no joint has a bond
+/// to break.
+pub(super) struct OpenFlips(Vec<u32>);
+
+impl OpenFlips {
+    pub(super) fn new(bonded: bool, contacts: usize) -> Self {
+        OpenFlips(vec![0; if bonded { contacts } else { 0 }])
+    }
+
+    /// Count the changes from the last iteration's states `prev_state` (forces
+    /// `prev_force`) to `trial`'s, where the contact carries a force above `negligible`
+    /// (N) on one side; nothing at the first iteration (`it` = 0).
+    pub(super) fn count(
+        &mut self,
+        it: usize,
+        trial: &Trial,
+        (prev_state, prev_force): (&[ContactState], &[[f64; 2]]),
+        negligible: f64,
+    ) {
+        if it == 0 {
+            return;
         }
+        let matters = |f: [f64; 2]| f[0].hypot(f[1]) > negligible;
+        for (k, flips) in self.0.iter_mut().enumerate() {
+            let open = trial.state[k] == ContactState::Open;
+            if open != (prev_state[k] == ContactState::Open)
+                && (matters(trial.force[k]) || matters(prev_force[k]))
+            {
+                *flips += 1;
+            }
+        }
+    }
+
+    /// Break the bond of every contact that changed [`BOND_BREAK_FLIPS`] times, is not
+    /// `skip`ped and whose bond `broken_bond(k, history)` breaks: its `history` set to
+    /// broken, the history it had pushed onto `broken` (to give back if the iterations
+    /// still fail). Whether any broke.
+    pub(super) fn break_bonds(
+        &self,
+        history: &mut [crate::material::History],
+        broken_bond: impl Fn(usize, crate::material::History) -> Option<crate::material::History>,
+        skip: impl Fn(usize) -> bool,
+        broken: &mut Vec<(usize, crate::material::History)>,
+    ) -> bool {
+        let mut broke = false;
+        for (k, &flips) in self.0.iter().enumerate() {
+            if flips < BOND_BREAK_FLIPS || k >= history.len() || skip(k) {
+                continue;
+            }
+            if let Some(b) = broken_bond(k, history[k]) {
+                if super::tracing() {
+                    eprintln!("  bond broken: contact {k} after {flips} changes");
+                }
+                broken.push((k, history[k]));
+                history[k] = b;
+                broke = true;
+            }
+        }
+        broke
     }
 }

@@ -432,9 +432,10 @@ pub struct Dynamics<'a> {
     area: Vec<f64>,
     cur: Mesh,
     committed: Committed,
-    /// The bonds broken in the current try of a step ([`Dynamics::break_cycling_bonds`]),
-    /// with the history each had: restored when the try fails, so that a cut step starts
-    /// from the committed state as it was.
+    /// The bonds broken in the tries of the step being taken
+    /// ([`Dynamics::break_cycling_bonds`]), with the history each had: given back when
+    /// the step fails or is cut ([`Dynamics::give_back_bonds`]), so that its retry starts
+    /// from the committed state as it was; kept when it is committed.
     bonds_broken_here: Vec<(usize, crate::material::History)>,
     /// Velocity (m/s, rad/s) and acceleration (m/s², rad/s²) of the unknowns.
     v: Vec<f64>,
@@ -1242,15 +1243,19 @@ impl<'a> Dynamics<'a> {
         start: Option<&[f64]>,
     ) -> Result<Option<Accepted>> {
         let out = self.try_step(h, last_resort, start);
-        if matches!(out, Ok(Some(_))) {
-            self.stats.bonds_broken += self.bonds_broken_here.len();
-            self.bonds_broken_here.clear();
-        } else {
-            for (k, h) in self.bonds_broken_here.drain(..).rev() {
-                self.committed.history[k] = h;
-            }
+        if !matches!(out, Ok(Some(_))) {
+            self.give_back_bonds();
         }
         out
+    }
+
+    /// Give back the bonds broken in the tries of the step being taken
+    /// ([`Dynamics::break_cycling_bonds`]): the step failed or is cut, and its retry
+    /// starts from the committed state as it was.
+    fn give_back_bonds(&mut self) {
+        for (k, h) in self.bonds_broken_here.drain(..).rev() {
+            self.committed.history[k] = h;
+        }
     }
 
     /// The iterations of [`Dynamics::step`].
@@ -2043,6 +2048,7 @@ impl<'a> Dynamics<'a> {
                 if let Some((a, f)) = saved {
                     (self.a, self.f_int) = (a, f);
                 }
+                self.give_back_bonds();
                 if accepted.is_some() {
                     h *= 0.5;
                     continue;
@@ -2059,6 +2065,8 @@ impl<'a> Dynamics<'a> {
                     // an error-controlled step grows only where the doubled step would
                     // stay within the tolerance (the local error grows as h³)
                     let grow = self.settings.adaptive.is_none_or(|tol| error < tol / 8.0);
+                    self.stats.bonds_broken += self.bonds_broken_here.len();
+                    self.bonds_broken_here.clear();
                     self.commit(acc);
                     if super::tracing() {
                         eprintln!(

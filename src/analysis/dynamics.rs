@@ -434,8 +434,9 @@ pub struct Dynamics<'a> {
     committed: Committed,
     /// The bonds broken in the tries of the step being taken
     /// ([`Dynamics::break_cycling_bonds`]), with the history each had: given back when
-    /// the step fails or is cut ([`Dynamics::give_back_bonds`]), so that its retry starts
-    /// from the committed state as it was; kept when it is committed.
+    /// the step fails or is cut ([`OpenFlips::give_back`], in [`Dynamics::advance_to`]),
+    /// so that its retry starts from the committed state as it was; kept when it is
+    /// committed.
     bonds_broken_here: Vec<(usize, crate::material::History)>,
     /// Velocity (m/s, rad/s) and acceleration (m/s², rad/s²) of the unknowns.
     v: Vec<f64>,
@@ -1242,29 +1243,6 @@ impl<'a> Dynamics<'a> {
         last_resort: bool,
         start: Option<&[f64]>,
     ) -> Result<Option<Accepted>> {
-        let out = self.try_step(h, last_resort, start);
-        if !matches!(out, Ok(Some(_))) {
-            self.give_back_bonds();
-        }
-        out
-    }
-
-    /// Give back the bonds broken in the tries of the step being taken
-    /// ([`Dynamics::break_cycling_bonds`]): the step failed or is cut, and its retry
-    /// starts from the committed state as it was.
-    fn give_back_bonds(&mut self) {
-        for (k, h) in self.bonds_broken_here.drain(..).rev() {
-            self.committed.history[k] = h;
-        }
-    }
-
-    /// The iterations of [`Dynamics::step`].
-    fn try_step(
-        &mut self,
-        h: f64,
-        last_resort: bool,
-        start: Option<&[f64]>,
-    ) -> Result<Option<Accepted>> {
         let s = self.settings.scheme;
         let inertia = self.settings.inertia;
         // without inertia: backward Euler, v₁ = Δu/h, the balance taken at t₁
@@ -2048,7 +2026,9 @@ impl<'a> Dynamics<'a> {
                 if let Some((a, f)) = saved {
                     (self.a, self.f_int) = (a, f);
                 }
-                self.give_back_bonds();
+                // the bonds broken in the step's tries are given back: its retry starts
+                // from the committed state as it was
+                OpenFlips::give_back(&mut self.committed.history, &mut self.bonds_broken_here);
                 if accepted.is_some() {
                     h *= 0.5;
                     continue;

@@ -1294,9 +1294,7 @@ impl<'a> Driver<'a> {
         if !matches!(out, Ok(Ok(_))) {
             // the retry (a cut increment, the capacity search's next bracket) starts from
             // the committed state as it was
-            for (k, h) in self.bonds_broken_here.drain(..) {
-                self.committed.history[k] = h;
-            }
+            OpenFlips::give_back(&mut self.committed.history, &mut self.bonds_broken_here);
         }
         out
     }
@@ -2696,5 +2694,16 @@ impl OpenFlips {
             }
         }
         broke
+    }
+
+    /// Give the bonds broken by [`OpenFlips::break_bonds`] back to `history` (`broken`
+    /// emptied): the iterations they were broken in did not lead to a committed state.
+    pub(super) fn give_back(
+        history: &mut [crate::material::History],
+        broken: &mut Vec<(usize, crate::material::History)>,
+    ) {
+        for (k, h) in broken.drain(..) {
+            history[k] = h;
+        }
     }
 }

@@ -13,11 +13,9 @@
 mod common;
 
 use dfem::assembly::System;
-use dfem::mesh::{BlockDofs, Mesh};
+use dfem::mesh::Mesh;
 use dfem::solve::{block_partition, configure, LinearBackend, SolveError};
-use dfem_kernels::{
-    max_relative_difference, CsrMatrix, FaerCholesky, FaerCholeskySubstructured, CONSTRAINED,
-};
+use dfem_kernels::{max_relative_difference, CsrMatrix, FaerCholesky, FaerCholeskySubstructured};
 
 const TOL: f64 = 1e-10;
 
@@ -45,26 +43,10 @@ fn wall(n: usize, rigid: bool) -> Wall {
     }
 }
 
-/// The unknowns of block `b`.
-fn block_unknowns(m: &Mesh, b: usize) -> Vec<usize> {
-    let blk = &m.blocks[b];
-    match blk.dofs {
-        BlockDofs::Fixed => Vec::new(),
-        BlockDofs::Rigid { first, .. } => (first as usize..first as usize + 3).collect(),
-        BlockDofs::Deformable => blk
-            .nodes
-            .clone()
-            .flat_map(|v| m.node_dofs[v as usize])
-            .filter(|&d| d != CONSTRAINED)
-            .map(|d| d as usize)
-            .collect(),
-    }
-}
-
 /// The part of each block (None for fixed blocks).
 fn block_parts(m: &Mesh, part: &[u32]) -> Vec<Option<u32>> {
     (0..m.blocks.len())
-        .map(|b| block_unknowns(m, b).first().map(|&d| part[d]))
+        .map(|b| m.block_unknowns(b).first().map(|&d| part[d]))
         .collect()
 }
 
@@ -95,7 +77,9 @@ fn substructured_matches_faer_cholesky_on_rigid_and_deformable_walls() {
             let part = block_partition(&w.mesh, k).unwrap();
             let bp = block_parts(&w.mesh, &part);
             for (b, p) in bp.iter().enumerate() {
-                assert!(block_unknowns(&w.mesh, b)
+                assert!(w
+                    .mesh
+                    .block_unknowns(b)
                     .iter()
                     .all(|&d| Some(part[d]) == *p));
             }
@@ -263,7 +247,7 @@ fn a_mechanism_is_an_error_at_an_unknown_of_the_free_block() {
         match be.factorize(&k) {
             Err(SolveError::NotPositiveDefinite { index, .. }) => {
                 assert!(
-                    block_unknowns(&w.mesh, b).contains(&index),
+                    w.mesh.block_unknowns(b).contains(&index),
                     "block {b}: unknown {index}"
                 )
             }
@@ -278,7 +262,7 @@ fn a_mechanism_is_an_error_at_an_unknown_of_the_free_block() {
     let b = w.mesh.blocks.len() / 2;
     let k = without_springs(&w, b);
     let mut be = substructured(&w, 2);
-    let unknowns = block_unknowns(&w.mesh, b);
+    let unknowns = w.mesh.block_unknowns(b);
     match be.factorize(&k) {
         Err(SolveError::NotPositiveDefinite { index, .. }) => {
             assert!(unknowns.contains(&index), "unknown {index}")

@@ -143,6 +143,14 @@ pub trait LinearBackend: Send {
     fn factorized_values(&self) -> Option<&[f64]> {
         None
     }
+    /// Whether a failed Cholesky factorization computes the value of the failed pivot for
+    /// its error ([`SolveError::NotPositiveDefinite`]'s `pivot`: faer's backends run an
+    /// LDLᵀ factorization of the same matrix for it, as dear as a successful
+    /// factorization) or leaves it NaN. On by default; the nonlinear drivers, which only
+    /// ask whether a factorization succeeded (a singular secant matrix is an expected
+    /// state there, met at every iteration of a mechanism), turn it off. Backends without
+    /// that extra work ignore it (the default).
+    fn set_failed_pivot_value(&mut self, _on: bool) {}
     /// Near-null space of the matrices to come: for elasticity of blocky structures, the
     /// rigid-body modes (METHOD.md §2: two translations and the rotation about each
     /// block's centroid, restricted to that block's unknowns), as dense vectors of length n.

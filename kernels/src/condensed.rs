@@ -791,6 +791,11 @@ impl LinearBackend for FaerCholeskyCondensed {
         }
     }
 
+    fn set_failed_pivot_value(&mut self, on: bool) {
+        self.whole.set_failed_pivot_value(on);
+        self.root.set_failed_pivot_value(on);
+    }
+
     fn set_interiors(&mut self, group: &[u32]) -> Result<(), SolveError> {
         self.groups = Some(group.to_vec());
         self.plan = None;

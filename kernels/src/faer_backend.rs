@@ -86,6 +86,29 @@ pub(crate) struct CholAnalysis {
     pub(crate) last_values: Vec<f64>,
 }
 
+/// faer's numeric LDLᵀ factorization of `mat` (the pattern of `symbolic`) into
+/// `l_values`; `Err(index)`: a zero pivot at that (faer's) index.
+fn numeric_ldlt(
+    symbolic: &SymbolicCholesky<u32>,
+    l_values: &mut [f64],
+    mem: &mut MemBuffer,
+    mat: SparseColMatRef<'_, u32, f64>,
+    par: Par,
+) -> Result<(), usize> {
+    symbolic
+        .factorize_numeric_ldlt(
+            l_values,
+            mat,
+            Side::Lower,
+            LdltRegularization::default(),
+            par,
+            MemStack::new(mem),
+            Default::default(),
+        )
+        .map(|_| ())
+        .map_err(|LdltError::ZeroPivot { index }| index)
+}
+
 impl CholAnalysis {
     /// Permuted column of a failed pivot from faer's error index (0-based permuted column
     /// in both the simplicial and the supernodal variants, checked by the tests); clamped
@@ -248,6 +271,9 @@ pub(crate) struct CholeskyCore {
     relax: Option<Vec<(usize, f64)>>,
     /// Ask the kernel for transparent huge pages for the factor values.
     huge_pages: bool,
+    /// A failed LLᵀ computes the failed pivot's value (an LDLᵀ factorization) for its
+    /// error ([`LinearBackend::set_failed_pivot_value`]).
+    failed_pivot_value: bool,
     pub(crate) analysis: Option<CholAnalysis>,
     pub(crate) stats: SolverStats,
 }
@@ -272,6 +298,7 @@ impl CholeskyCore {
             threads: 1,
             relax: None,
             huge_pages: true,
+            failed_pivot_value: true,
             analysis: None,
             stats: SolverStats {
                 min_pivot_ratio: f64::NAN,
@@ -390,6 +417,7 @@ impl CholeskyCore {
         let t = Instant::now();
         let kind = self.kind;
         let par = self.par();
+        let failed_pivot_value = self.failed_pivot_value;
         let an = self.analysis.as_mut().expect("analyzed");
         if a.values.len() != an.pattern.nnz() {
             an.factored = false;
@@ -420,19 +448,8 @@ impl CholeskyCore {
                 )
                 .map(|_| ())
                 .map_err(|LltError::NonPositivePivot { index }| Ok(index)),
-            Kind::Ldlt => an
-                .symbolic
-                .factorize_numeric_ldlt(
-                    &mut an.l_values,
-                    mat,
-                    Side::Lower,
-                    LdltRegularization::default(),
-                    par,
-                    MemStack::new(&mut an.mem),
-                    Default::default(),
-                )
-                .map(|_| ())
-                .map_err(|LdltError::ZeroPivot { index }| Err(SolveError::Singular { index })),
+            Kind::Ldlt => numeric_ldlt(&an.symbolic, &mut an.l_values, &mut an.mem, mat, par)
+                .map_err(|index| Err(SolveError::Singular { index })),
         };
         self.stats.numeric_factorizations += 1;
         // faer reports the failed pivot 1-based from its simplicial kernels (`k + 1`) and
@@ -482,23 +499,14 @@ impl CholeskyCore {
                 let p = an.failed_column(index);
                 // LLᵀ failed at permuted column p: the LDLᵀ pivot there is the failed value.
                 let i = an.original(p);
-                let ldlt = an
-                    .symbolic
-                    .factorize_numeric_ldlt(
-                        &mut an.l_values,
-                        mat,
-                        Side::Lower,
-                        LdltRegularization::default(),
-                        par,
-                        MemStack::new(&mut an.mem),
-                        Default::default(),
-                    )
-                    .map(|_| ())
-                    .map_err(|LdltError::ZeroPivot { index }| index);
-                let pivot = match ldlt {
-                    Ok(()) => an.factor_diagonal()[p],
-                    Err(index) if an.failed_column(index) == p => 0.0,
-                    Err(_) => f64::NAN,
+                let pivot = if failed_pivot_value {
+                    match numeric_ldlt(&an.symbolic, &mut an.l_values, &mut an.mem, mat, par) {
+                        Ok(()) => an.factor_diagonal()[p],
+                        Err(index) if an.failed_column(index) == p => 0.0,
+                        Err(_) => f64::NAN,
+                    }
+                } else {
+                    f64::NAN
                 };
                 self.stats.min_pivot_ratio = f64::NAN;
                 self.stats.min_pivot_index = i;
@@ -803,6 +811,9 @@ chol_backend!(
     fn factorized_values(&self) -> Option<&[f64]> {
         let an = self.0.analysis.as_ref().filter(|an| an.factored)?;
         Some(&an.last_values)
+    },
+    fn set_failed_pivot_value(&mut self, on: bool) {
+        self.0.failed_pivot_value = on;
     }
 );
 chol_backend!(FaerLdlt, "faer-ldlt", "faer-ldlt-metis");

@@ -566,6 +566,27 @@ fn non_positive_pivot_index_simplicial_and_supernodal() {
             }
             other => panic!("threshold {threshold}: {other:?}"),
         }
+        // without the failed pivot's value (the drivers' setting): the same unknown, NaN,
+        // one numeric factorization, and the same factorization of the matrix afterwards
+        for backend in [
+            Box::new(FaerCholesky::new().with_supernodal_threshold(threshold))
+                as Box<dyn LinearBackend>,
+            Box::new(FaerCholeskyCondensed::new()),
+        ] {
+            let mut s = backend;
+            s.set_failed_pivot_value(false);
+            match s.factorize(&a) {
+                Err(SolveError::NotPositiveDefinite { index, pivot }) => {
+                    assert!(pivot.is_nan(), "threshold {threshold}: pivot {pivot}");
+                    assert_eq!(index, bad, "threshold {threshold}");
+                }
+                other => panic!("threshold {threshold}: {other:?}"),
+            }
+            s.factorize(&p.a).unwrap();
+            let mut x = p.b.clone();
+            s.solve(&mut x).unwrap();
+            assert!(rel_err(&x, &dense_solve(&p.a, &p.b)) < 1e-10);
+        }
         let mut l = FaerLdlt::new().with_supernodal_threshold(threshold);
         l.factorize(&a).unwrap();
         assert!(l.stats().min_pivot_ratio < 0.0);

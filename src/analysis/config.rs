@@ -246,57 +246,12 @@ pub fn evaluate_reusing(
     let stress: Vec<[f64; 3]> = (0..cur.triangles.len())
         .into_par_iter()
         .with_min_len(256)
-        .map(|t| {
-            let tri = cur.triangles[t];
-            let x0 = tri.map(|k| cur.nodes[k as usize]);
-            let (b0, _) = cst_b(x0);
-            // F = ∂x/∂X = I + ∇Δu (constant over a CST)
-            let mut f = [[1.0, 0.0], [0.0, 1.0]];
-            for k in 0..3 {
-                let d = du[tri[k] as usize];
-                for i in 0..2 {
-                    f[i][0] += d[i] * b0[0][2 * k];
-                    f[i][1] += d[i] * b0[1][2 * k + 1];
-                }
-            }
-            // polar decomposition in 2D: R = rotation by θ
-            let th = (f[1][0] - f[0][1]).atan2(f[0][0] + f[1][1]);
-            let (s, c) = th.sin_cos();
-            // U = Rᵀ F
-            let u = [
-                [c * f[0][0] + s * f[1][0], c * f[0][1] + s * f[1][1]],
-                [-s * f[0][0] + c * f[1][0], -s * f[0][1] + c * f[1][1]],
-            ];
-            let eps = [u[0][0] - 1.0, u[1][1] - 1.0, u[0][1] + u[1][0]];
-            let dt = system.tri_dt(t);
-            let s0 = committed.stress[t];
-            let mut sl = [0.0; 3];
-            for i in 0..3 {
-                sl[i] =
-                    s0[i] + (dt[i][0] * eps[0] + dt[i][1] * eps[1] + dt[i][2] * eps[2]) / thickness;
-            }
-            // σ = R σ_l Rᵀ
-            let (sxx, syy, sxy) = (sl[0], sl[1], sl[2]);
-            [
-                c * c * sxx - 2.0 * s * c * sxy + s * s * syy,
-                s * s * sxx + 2.0 * s * c * sxy + c * c * syy,
-                s * c * (sxx - syy) + (c * c - s * s) * sxy,
-            ]
-        })
+        .map(|t| triangle_stress(system, cur, committed, thickness, &du, t))
         .collect();
     // internal force vector, serial in element order (deterministic): the triangles
     let mut f_int = vec![0.0; n];
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        let x = tri.map(|k| mesh.nodes[k as usize]);
-        let (b, area_t) = cst_b(x);
-        let s = stress[t];
-        for k in 0..6 {
-            let v = thickness * area_t * (b[0][k] * s[0] + b[1][k] * s[1] + b[2][k] * s[2]);
-            let dof = mesh.node_dofs[tri[k / 2] as usize][k % 2];
-            if dof != CONSTRAINED {
-                f_int[dof as usize] += v;
-            }
-        }
+    for (t, s) in stress.iter().enumerate() {
+        add_triangle_force(&mesh, thickness, t, s, &mut f_int);
     }
     // the contacts: their laws, and their shares of F_int (METHOD.md §3: Fₙ gₙ + Fₛ gₛ on
     // each free unknown, with the map of the moved configuration), computed in parallel
@@ -322,20 +277,8 @@ pub fn evaluate_reusing(
             .with_min_len(256)
             .enumerate()
             .for_each(|(i, ((((share, f), st), d), h))| {
-                let k = start + i;
-                let c = &cur.contacts[k];
-                let r = sub(du[c.node_m as usize], c.at_l(|n| du[n as usize]));
-                let n0 = c.normal;
-                *d = in_contact_frame(n0, r);
-                let h0 = committed.history.get(k).copied().unwrap_or([0.0; 2]);
-                (*f, *st, *h) = law
-                    .law(k)
-                    .update_history(area[k], committed.force[k], h0, *d);
-                if *f != [0.0, 0.0] {
-                    share.set(&crate::assembly::contact_map(&mesh, &mesh.contacts[k]), *f);
-                } else {
-                    share.clear();
-                }
+                let c = contact_update(&mesh, cur, committed, law, area, &du, start + i, share);
+                (*f, *st, *d, *h) = c;
             });
         for share in part.iter() {
             share.add_to(&mut f_int);
@@ -350,6 +293,176 @@ pub fn evaluate_reusing(
         dq: dq.to_vec(),
         rel,
         history,
+    }
+}
+
+/// The Cauchy stress (σxx, σyy, σxy) (Pa) of triangle `t` after the nodes' displacement
+/// increments `du` (m) from the configuration `cur`: the co-rotational CST of
+/// [`evaluate`].
+fn triangle_stress(
+    system: &System,
+    cur: &Mesh,
+    committed: &Committed,
+    thickness: f64,
+    du: &[Point],
+    t: usize,
+) -> [f64; 3] {
+    let tri = cur.triangles[t];
+    let x0 = tri.map(|k| cur.nodes[k as usize]);
+    let (b0, _) = cst_b(x0);
+    // F = ∂x/∂X = I + ∇Δu (constant over a CST)
+    let mut f = [[1.0, 0.0], [0.0, 1.0]];
+    for k in 0..3 {
+        let d = du[tri[k] as usize];
+        for i in 0..2 {
+            f[i][0] += d[i] * b0[0][2 * k];
+            f[i][1] += d[i] * b0[1][2 * k + 1];
+        }
+    }
+    // polar decomposition in 2D: R = rotation by θ
+    let th = (f[1][0] - f[0][1]).atan2(f[0][0] + f[1][1]);
+    let (s, c) = th.sin_cos();
+    // U = Rᵀ F
+    let u = [
+        [c * f[0][0] + s * f[1][0], c * f[0][1] + s * f[1][1]],
+        [-s * f[0][0] + c * f[1][0], -s * f[0][1] + c * f[1][1]],
+    ];
+    let eps = [u[0][0] - 1.0, u[1][1] - 1.0, u[0][1] + u[1][0]];
+    let dt = system.tri_dt(t);
+    let s0 = committed.stress[t];
+    let mut sl = [0.0; 3];
+    for i in 0..3 {
+        sl[i] = s0[i] + (dt[i][0] * eps[0] + dt[i][1] * eps[1] + dt[i][2] * eps[2]) / thickness;
+    }
+    // σ = R σ_l Rᵀ
+    let (sxx, syy, sxy) = (sl[0], sl[1], sl[2]);
+    [
+        c * c * sxx - 2.0 * s * c * sxy + s * s * syy,
+        s * s * sxx + 2.0 * s * c * sxy + c * c * syy,
+        s * c * (sxx - syy) + (c * c - s * s) * sxy,
+    ]
+}
+
+/// f_int += the nodal forces (N) of triangle `t` of the moved configuration `mesh` under
+/// the stress `s` (Pa).
+fn add_triangle_force(mesh: &Mesh, thickness: f64, t: usize, s: &[f64; 3], f_int: &mut [f64]) {
+    let tri = mesh.triangles[t];
+    let x = tri.map(|k| mesh.nodes[k as usize]);
+    let (b, area_t) = cst_b(x);
+    for k in 0..6 {
+        let v = thickness * area_t * (b[0][k] * s[0] + b[1][k] * s[1] + b[2][k] * s[2]);
+        let dof = mesh.node_dofs[tri[k / 2] as usize][k % 2];
+        if dof != CONSTRAINED {
+            f_int[dof as usize] += v;
+        }
+    }
+}
+
+/// Contact `k`'s law after the nodes' displacement increments `du` (m) from `cur`: its
+/// force (N), state, relative displacement increment in its frame (m) and history, its
+/// share of F_int on the moved configuration `mesh` written into `share`.
+#[allow(clippy::too_many_arguments)]
+fn contact_update(
+    mesh: &Mesh,
+    cur: &Mesh,
+    committed: &Committed,
+    law: &dyn ContactLaws,
+    area: &[f64],
+    du: &[Point],
+    k: usize,
+    share: &mut crate::assembly::ContactShare,
+) -> ([f64; 2], ContactState, [f64; 2], crate::material::History) {
+    let c = &cur.contacts[k];
+    let r = sub(du[c.node_m as usize], c.at_l(|n| du[n as usize]));
+    let d = in_contact_frame(c.normal, r);
+    let h0 = committed.history.get(k).copied().unwrap_or([0.0; 2]);
+    let (f, st, h) = law
+        .law(k)
+        .update_history(area[k], committed.force[k], h0, d);
+    if f != [0.0, 0.0] {
+        share.set(&crate::assembly::contact_map(mesh, &mesh.contacts[k]), f);
+    } else {
+        share.clear();
+    }
+    (f, st, d, h)
+}
+
+/// Which elements an [`evaluate_part`] evaluates: triangles and contacts, ascending.
+#[derive(Debug, Clone, Default)]
+pub struct Part {
+    pub triangles: Vec<usize>,
+    pub contacts: Vec<usize>,
+}
+
+impl Part {
+    /// The triangles of the blocks flagged in `blocks` and the contacts that touch one of
+    /// them: every element that adds to those blocks' unknowns.
+    pub fn of_blocks(mesh: &Mesh, blocks: &[bool]) -> Self {
+        let triangles = (0..mesh.triangles.len())
+            .filter(|&t| blocks[mesh.tri_block[t] as usize])
+            .collect();
+        let contacts = (0..mesh.contacts.len())
+            .filter(|&k| {
+                let c = &mesh.contacts[k];
+                blocks[c.block_l as usize] || blocks[c.block_m as usize]
+            })
+            .collect();
+        Part {
+            triangles,
+            contacts,
+        }
+    }
+}
+
+/// A trial increment evaluated on a [`Part`]'s elements ([`evaluate_part`]).
+pub struct PartTrial {
+    pub mesh: Mesh,
+    /// The part's contacts' forces (N) and relative displacement increments (m), in the
+    /// order of `Part::contacts`.
+    pub force: Vec<[f64; 2]>,
+    pub rel: Vec<[f64; 2]>,
+    /// The internal force vector of the part's elements (N).
+    pub f_int: Vec<f64>,
+}
+
+/// [`evaluate_reusing`] for the elements of `part` only: the moved configuration, the
+/// part's contacts' forces and the internal force vector of the part's elements. At the unknowns of blocks whose elements are all in
+/// the part ([`Part::of_blocks`]) it is [`evaluate`]'s F_int to the bit: the same terms,
+/// added in the same order (triangles, then contacts, each ascending).
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_part(
+    system: &System,
+    cur: &Mesh,
+    committed: &Committed,
+    law: &dyn ContactLaws,
+    area: &[f64],
+    thickness: f64,
+    dq: &[f64],
+    presc: &[Point],
+    spare: Option<Mesh>,
+    part: &Part,
+) -> PartTrial {
+    let (mesh, du) = moved_reusing(cur, dq, presc, spare);
+    let mut f_int = vec![0.0; cur.n_dofs];
+    for &t in &part.triangles {
+        let s = triangle_stress(system, cur, committed, thickness, &du, t);
+        add_triangle_force(&mesh, thickness, t, &s, &mut f_int);
+    }
+    let mut share = crate::assembly::ContactShare::NONE;
+    let (force, rel) = part
+        .contacts
+        .iter()
+        .map(|&k| {
+            let (f, _, d, _) = contact_update(&mesh, cur, committed, law, area, &du, k, &mut share);
+            share.add_to(&mut f_int);
+            (f, d)
+        })
+        .unzip();
+    PartTrial {
+        mesh,
+        force,
+        rel,
+        f_int,
     }
 }
 
@@ -397,6 +510,78 @@ mod tests {
                         t[i][j]
                     );
                 }
+            }
+        }
+    }
+
+    /// [`evaluate_part`] on the elements of a few blocks gives [`evaluate`]'s internal
+    /// forces at those blocks' unknowns to the bit, for rigid bricks and deformable ones
+    /// (triangles and contacts), from a committed state with forces and stresses in it,
+    /// with increments large enough that contacts open, slip and stick; and its contacts'
+    /// forces are `evaluate`'s.
+    #[test]
+    fn a_part_gives_the_whole_evaluation_at_its_blocks() {
+        use crate::material::PerContact;
+        for rigid in [true, false] {
+            let text = crate::scene::examples::scaled_wall(4, rigid);
+            let text = if rigid {
+                text
+            } else {
+                text.replace("joint = 0.0\n", "joint = 0.0\nmesh_size = 0.1\n")
+            };
+            let scene = crate::scene::parse_str(&text, None).unwrap();
+            let mesh = crate::mesh::build(&scene);
+            let system = System::new(&scene, &mesh);
+            let law = PerContact::of_scene(&scene, &mesh);
+            let t = scene.model.thickness;
+            let area: Vec<f64> = mesh.contacts.iter().map(|c| c.length * t).collect();
+            let n = mesh.n_dofs;
+            let presc: Vec<Point> = mesh.blocks.iter().map(|_| [0.0, 0.0]).collect();
+            // a committed state: the wall moved once, its forces and stresses kept
+            let first = evaluate(
+                &system,
+                &mesh,
+                &Committed::zero(&mesh),
+                &law,
+                &area,
+                t,
+                &pattern(n, -2e-5),
+                &presc,
+            );
+            let committed = Committed {
+                stress: first.stress,
+                force: first.force,
+                state: first.state,
+                u: vec![0.0; n],
+                history: first.history,
+            };
+            let dq = pattern(n, 3e-4);
+            let whole = evaluate(&system, &mesh, &committed, &law, &area, t, &dq, &presc);
+            let states = |s: ContactState| whole.state.iter().filter(|&&x| x == s).count();
+            assert!(states(ContactState::Open) > 0 && states(ContactState::Slip) > 0);
+            let blocks: Vec<bool> = (0..mesh.blocks.len()).map(|b| b % 3 == 1).collect();
+            let part = Part::of_blocks(&mesh, &blocks);
+            assert!(!part.contacts.is_empty() && part.contacts.len() < mesh.contacts.len());
+            assert_eq!(rigid, part.triangles.is_empty());
+            let got = evaluate_part(
+                &system, &mesh, &committed, &law, &area, t, &dq, &presc, None, &part,
+            );
+            let mut checked = 0;
+            for b in (0..mesh.blocks.len()).filter(|&b| blocks[b]) {
+                let dofs = mesh.block_unknowns(b);
+                for d in dofs {
+                    assert_eq!(
+                        got.f_int[d].to_bits(),
+                        whole.f_int[d].to_bits(),
+                        "unknown {d}"
+                    );
+                    checked += 1;
+                }
+            }
+            assert!(checked > 10);
+            for (i, &k) in part.contacts.iter().enumerate() {
+                assert_eq!(got.force[i], whole.force[k]);
+                assert_eq!(got.rel[i], whole.rel[k]);
             }
         }
     }

@@ -630,6 +630,8 @@ impl<'a> Dynamics<'a> {
     ) -> Result<Dynamics<'a>> {
         let settings = Settings::from_scene(scene)?;
         let system = System::for_dynamics(scene, mesh);
+        // a failed factorization only says "singular" here: no LDLᵀ for its pivot's value
+        backend.set_failed_pivot_value(false);
         let joint = scene.joints.get(scene.contacts.joint);
         let law = joint.map(MohrCoulomb::from_joint).unwrap_or(MohrCoulomb {
             elastic: crate::material::ElasticBand {

@@ -316,6 +316,9 @@ pub struct Driver<'a> {
     /// increment: the increment's later tangent steps do not try it again
     /// ([`Driver::tangent_with_secant_factor`]).
     gmres_failed: bool,
+    /// The elastic stiffness K₀ on `cur` (no unknowns pinned), assembled when first needed
+    /// after a commit ([`Driver::elastic_on_cur`]).
+    k0: Option<CsrMatrix>,
     /// The increment iterated is a capacity search's probe of the load factor, which
     /// stops at shorter stall windows ([`Driver::stall_window`]); the failure that closes
     /// the search's bracket is iterated again with the full ones.
@@ -574,14 +577,9 @@ impl<'a> Driver<'a> {
     ) -> Result<Driver<'a>> {
         let settings = Settings::from_scene(scene)?;
         let system = System::new(scene, mesh);
-        let law = PerContact {
-            laws: scene.joints.iter().map(JointLaw::from_joint).collect(),
-            of: mesh
-                .contacts
-                .iter()
-                .map(|c| scene.joint_of(c.block_l as usize, c.block_m as usize) as u32)
-                .collect(),
-        };
+        // a failed factorization only says "singular" here: no LDLᵀ for its pivot's value
+        backend.set_failed_pivot_value(false);
+        let law = PerContact::of_scene(scene, mesh);
         let t = scene.model.thickness;
         let area = mesh.contacts.iter().map(|c| c.length * t).collect();
         let kbuf = CsrMatrix::zeros(system.plan.pattern().clone());
@@ -610,6 +608,7 @@ impl<'a> Driver<'a> {
             held_current: false,
             held_on_cur: Vec::new(),
             gmres_failed: false,
+            k0: None,
             probing: false,
             converged_norm: 0.0,
             scale_floor: 0.0,
@@ -670,27 +669,94 @@ impl<'a> Driver<'a> {
             presc,
             spare,
         );
-        for (k, fr) in self.frozen.iter().enumerate() {
-            let Some(fr) = fr else { continue };
-            let fa = fr.force(t.rel[k]);
-            let delta = [fa[0] - t.force[k][0], fa[1] - t.force[k][1]];
+        self.held_contacts(
+            &t.mesh,
+            Some,
+            &mut t.force,
+            &t.rel,
+            Some(&mut t.state),
+            &mut t.f_int,
+        );
+        t
+    }
+
+    /// The contacts held by the contact-state corrector take the force of their frozen law
+    /// and the fallen ones none, the differences mapped into `f_int` (on `mesh`): the
+    /// frozen contacts in ascending order, then the fallen ones. `slot(k)`: where contact
+    /// k's force, relative displacement and state are in `force`, `rel` and `state`
+    /// (`None`: not evaluated, left alone).
+    fn held_contacts(
+        &self,
+        mesh: &Mesh,
+        slot: impl Fn(usize) -> Option<usize>,
+        force: &mut [[f64; 2]],
+        rel: &[[f64; 2]],
+        state: Option<&mut [ContactState]>,
+        f_int: &mut [f64],
+    ) {
+        // contact k (slot i) now carries `f` in state `s`: `delta`, the change of its
+        // force, mapped into f_int
+        let mut set = |i: usize, k: usize, f: [f64; 2], s: ContactState, delta: [f64; 2]| {
             if delta != [0.0, 0.0] {
-                let map = crate::assembly::contact_map(&t.mesh, &t.mesh.contacts[k]);
-                crate::assembly::add_mapped_force(&map, delta, &mut t.f_int);
+                let map = crate::assembly::contact_map(mesh, &mesh.contacts[k]);
+                crate::assembly::add_mapped_force(&map, delta, f_int);
             }
-            t.force[k] = fa;
-            t.state[k] = fr.state;
+            (i, f, s)
+        };
+        let mut changes = Vec::new();
+        for (k, fr) in self.frozen.iter().enumerate() {
+            let (Some(fr), Some(i)) = (fr, slot(k)) else {
+                continue;
+            };
+            let fa = fr.force(rel[i]);
+            let delta = [fa[0] - force[i][0], fa[1] - force[i][1]];
+            changes.push(set(i, k, fa, fr.state, delta));
+        }
+        for &(i, f, _) in &changes {
+            force[i] = f;
         }
         for &k in &self.fallen_contacts {
-            let f = t.force[k];
-            if f != [0.0, 0.0] {
-                let map = crate::assembly::contact_map(&t.mesh, &t.mesh.contacts[k]);
-                crate::assembly::add_mapped_force(&map, [-f[0], -f[1]], &mut t.f_int);
-            }
-            t.force[k] = [0.0, 0.0];
-            t.state[k] = ContactState::Open;
+            let Some(i) = slot(k) else { continue };
+            let f = force[i];
+            changes.push(set(i, k, [0.0, 0.0], ContactState::Open, [-f[0], -f[1]]));
+            force[i] = [0.0, 0.0];
         }
-        t
+        if let Some(st) = state {
+            for (i, _, s) in changes {
+                st[i] = s;
+            }
+        }
+    }
+
+    /// The internal forces (N) of [`Driver::trial`] for the increment `dq`, computed from
+    /// the elements of `part` only ([`super::config::evaluate_part`]; the frozen and
+    /// fallen contacts of the part adjusted as in `trial`): at the unknowns of the blocks
+    /// `part` was made for ([`super::config::Part::of_blocks`]) `trial`'s F_int to the
+    /// bit, at the cost of the part's elements.
+    fn f_int_of_part(&self, dq: &[f64], presc: &[Point], part: &super::config::Part) -> Vec<f64> {
+        let spare = self.spare.lock().unwrap_or_else(|e| e.into_inner()).pop();
+        let mut t = super::config::evaluate_part(
+            &self.system,
+            &self.cur,
+            &self.committed,
+            &self.law,
+            &self.area,
+            self.scene.model.thickness,
+            dq,
+            presc,
+            spare,
+            part,
+        );
+        self.held_contacts(
+            &t.mesh,
+            |k| part.contacts.binary_search(&k).ok(),
+            &mut t.force,
+            &t.rel,
+            None,
+            &mut t.f_int,
+        );
+        self.keep_spare(t.mesh);
+        t.f_int
     }
 
     /// The contacts' local stiffness matrices (N/m) in the given states; `newton` adds the
@@ -808,12 +874,23 @@ impl<'a> Driver<'a> {
         s2.max(0.0).sqrt().max(self.scale_floor).max(1e-300)
     }
 
-    /// Solve with the elastic stiffness of the initial configuration (factorized once).
-    fn solve_k0(&mut self, rhs: &mut [f64]) -> Result<bool> {
-        if self.held != Held::K0 {
+    /// The elastic stiffness K₀ (N/m) on the geometry of the last converged increment,
+    /// no unknowns pinned: assembled once per increment, when first asked for (the
+    /// blended steps of a singular secant matrix ask for it at every iteration).
+    fn elastic_on_cur(&mut self) -> &CsrMatrix {
+        if self.k0.is_none() {
             let local = self.elastic_local();
             let mut k = CsrMatrix::zeros(self.system.plan.pattern().clone());
             self.system.stiffness_into(&self.cur, &local, &mut k);
+            self.k0 = Some(k);
+        }
+        self.k0.as_ref().expect("assembled above")
+    }
+
+    /// Solve with the elastic stiffness of the initial configuration (factorized once).
+    fn solve_k0(&mut self, rhs: &mut [f64]) -> Result<bool> {
+        if self.held != Held::K0 {
+            let mut k = self.elastic_on_cur().clone();
             Self::pin_rows(&self.pins, &mut k);
             let ok = self.backend.factorize(&k).is_ok() && !super::singular_pivots(&*self.backend);
             self.held = Held::K0;
@@ -1257,13 +1334,20 @@ impl<'a> Driver<'a> {
     /// Solve (K_s + ε K₀) x = r, both in the configuration of the last converged
     /// increment (as every iteration matrix: see [`Driver::correction`]).
     fn blended_step(&mut self, trial: &Trial, r: &[f64], eps: f64) -> Result<Option<Vec<f64>>> {
-        let elastic = self.elastic_local();
-        let mut k0 = CsrMatrix::zeros(self.system.plan.pattern().clone());
-        self.system.stiffness_into(&self.cur, &elastic, &mut k0);
         let local = self.local_stiffness(trial, &trial.state, false);
-        self.system
-            .stiffness_into(&self.cur, &local, &mut self.kbuf);
+        if self.pins.is_empty() {
+            // K_s: where `kbuf` holds the secant matrix of these or nearby states (the
+            // correction that found K_s singular assembled it), only the contacts whose
+            // stiffness differs are assembled again (bit-identical to a whole assembly)
+            self.assemble_kbuf(local);
+        } else {
+            // (pinned rows are pinned once, after the blend)
+            self.system
+                .stiffness_into(&self.cur, &local, &mut self.kbuf);
+        }
         self.kbuf_local = None;
+        self.elastic_on_cur();
+        let k0 = self.k0.as_ref().expect("assembled above");
         for (a, b) in self.kbuf.values.iter_mut().zip(&k0.values) {
             *a += eps * b;
         }
@@ -1823,22 +1907,8 @@ impl<'a> Driver<'a> {
     /// The unknowns of each block (m, rad): a rigid block's three, a deformable block's
     /// nodes' two each, none for a fixed block.
     fn block_dofs(&self) -> Vec<Vec<usize>> {
-        self.cur
-            .blocks
-            .iter()
-            .map(|b| match b.dofs {
-                crate::mesh::BlockDofs::Rigid { first, .. } => {
-                    (first as usize..first as usize + 3).collect()
-                }
-                crate::mesh::BlockDofs::Deformable => b
-                    .nodes
-                    .clone()
-                    .flat_map(|n| self.cur.node_dofs[n as usize])
-                    .filter(|&d| d != dfem_kernels::CONSTRAINED)
-                    .map(|d| d as usize)
-                    .collect(),
-                crate::mesh::BlockDofs::Fixed => Vec::new(),
-            })
+        (0..self.cur.blocks.len())
+            .map(|b| self.cur.block_unknowns(b))
             .collect()
     }
 
@@ -1919,8 +1989,11 @@ impl<'a> Driver<'a> {
             s
         };
         let at = |a: f64| -> Vec<f64> { from.iter().zip(&mf).map(|(x, y)| x + a * y).collect() };
+        // the slopes read the out-of-balance force at the free blocks' unknowns only: the
+        // elements of those blocks give it, at a fraction of a whole trial's cost
+        let part = super::config::Part::of_blocks(&self.cur, &free);
         let slope_at =
-            |a: f64| slopes(&self.out_of_balance(f_ext, &self.trial(&at(a), presc).f_int));
+            |a: f64| slopes(&self.out_of_balance(f_ext, &self.f_int_of_part(&at(a), presc, &part)));
         let mmax = mf.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let mut prev = (0.0, slope_at(0.0));
         let s0 = prev.1.clone();
@@ -1981,6 +2054,7 @@ impl<'a> Driver<'a> {
         self.committed.history = trial.history;
         let old = std::mem::replace(&mut self.cur, trial.mesh);
         self.keep_spare(old);
+        self.k0 = None;
         self.kbuf_local = None;
         self.aux_local = None;
         // a held secant factorization is now of an older geometry: across increments it

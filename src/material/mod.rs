@@ -143,6 +143,21 @@ impl<L> PerContact<L> {
     }
 }
 
+impl PerContact<JointLaw> {
+    /// The laws of the scene's `[[joint]]`s, each contact of `mesh` given that of the
+    /// joint between its two blocks ([`crate::scene::Scene::joint_of`]).
+    pub fn of_scene(scene: &crate::scene::Scene, mesh: &crate::mesh::Mesh) -> Self {
+        PerContact {
+            laws: scene.joints.iter().map(JointLaw::from_joint).collect(),
+            of: mesh
+                .contacts
+                .iter()
+                .map(|c| scene.joint_of(c.block_l as usize, c.block_m as usize) as u32)
+                .collect(),
+        }
+    }
+}
+
 /// The law of a `[[joint]]`: Mohr–Coulomb with tension cut-off (METHOD.md §3), or with
 /// softening of the tensile strength and the cohesion (`softening = "exponential"`,
 /// [`Softening`]).

@@ -159,6 +159,23 @@ impl PointMap {
 }
 
 impl Mesh {
+    /// The unknowns of block `b` (m, rad): a rigid block's three, a deformable block's
+    /// nodes' two each (those not constrained), none for a fixed block.
+    pub fn block_unknowns(&self, b: usize) -> Vec<usize> {
+        let blk = &self.blocks[b];
+        match blk.dofs {
+            BlockDofs::Rigid { first, .. } => (first as usize..first as usize + 3).collect(),
+            BlockDofs::Deformable => blk
+                .nodes
+                .clone()
+                .flat_map(|n| self.node_dofs[n as usize])
+                .filter(|&d| d != CONSTRAINED)
+                .map(|d| d as usize)
+                .collect(),
+            BlockDofs::Fixed => Vec::new(),
+        }
+    }
+
     /// The maps of a contact's two points (l side, m side).
     pub fn contact_maps(&self, c: &Contact) -> (PointMap, PointMap) {
         let l = match c.along {

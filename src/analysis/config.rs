@@ -426,9 +426,10 @@ pub struct PartTrial {
 }
 
 /// [`evaluate_reusing`] for the elements of `part` only: the moved configuration, the
-/// part's contacts' forces and the internal force vector of the part's elements. At the unknowns of blocks whose elements are all in
-/// the part ([`Part::of_blocks`]) it is [`evaluate`]'s F_int to the bit: the same terms,
-/// added in the same order (triangles, then contacts, each ascending).
+/// part's contacts' forces and the internal force vector of the part's elements. At the
+/// unknowns of blocks whose elements are all in the part ([`Part::of_blocks`]) it is
+/// [`evaluate`]'s F_int to the bit: the same terms, added in the same order (triangles,
+/// then contacts, each ascending).
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_part(
     system: &System,

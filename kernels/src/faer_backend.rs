@@ -628,64 +628,6 @@ impl FaerCholesky {
         }
         self.0.solve(rhs)
     }
-
-    /// Whether the last analysis chose faer's supernodal factorization, rather than its
-    /// simplicial one (`None` before the first analysis).
-    pub fn supernodal(&self) -> Option<bool> {
-        self.0.supernodal()
-    }
-
-    /// Sets faer's supernodal threshold (takes effect at the next analysis): supernodal
-    /// where the flops per factor entry exceed 40 times it; [`DEFAULT_SUPERNODAL_THRESHOLD`]
-    /// (default: a ratio of [`SUPERNODAL_FLOP_RATIO`]), 1 = faer's automatic choice,
-    /// 0 = always supernodal, `f64::INFINITY` = always simplicial.
-    pub fn with_supernodal_threshold(mut self, threshold: f64) -> Self {
-        self.0.supernodal_threshold = threshold;
-        self.0.analysis = None;
-        self
-    }
-
-    /// Sets the fill-reducing ordering (takes effect at the next analysis): AMD (default)
-    /// or METIS nested dissection; the backend's name gets a `-metis` suffix with METIS.
-    pub fn with_ordering(mut self, ordering: FillOrdering) -> Self {
-        self.0.ordering = ordering;
-        self.0.analysis = None;
-        self
-    }
-
-    /// The fill-reducing ordering in use.
-    pub fn ordering(&self) -> FillOrdering {
-        self.0.ordering
-    }
-
-    /// Number of threads for faer's numeric factorization and solve (default 1 =
-    /// sequential, bit-identical for any rayon pool; k > 1 passes `Par::rayon(k)`, which
-    /// parallelises inside the dense supernode kernels only and is not bit-identical to
-    /// the sequential run). Takes effect at the next analysis.
-    pub fn with_threads(mut self, threads: usize) -> Self {
-        self.0.threads = threads.max(1);
-        self.0.analysis = None;
-        self
-    }
-
-    /// Sets faer's supernode relaxation (amalgamation) thresholds: two adjacent
-    /// supernodes with `c` columns in total and a fraction `z` of explicit zeros after
-    /// merging are merged when `c <= relax[k].0 && z < relax[k].1` for some k. `None`
-    /// restores faer's defaults `[(4, 1.0), (16, 0.8), (48, 0.1), (usize::MAX, 0.05)]`.
-    /// Takes effect at the next analysis.
-    pub fn with_supernode_relaxation(mut self, relax: Option<Vec<(usize, f64)>>) -> Self {
-        self.0.relax = relax;
-        self.0.analysis = None;
-        self
-    }
-
-    /// Whether to ask Linux for transparent huge pages for the factor (default `true`).
-    /// Takes effect at the next analysis.
-    pub fn with_huge_pages(mut self, on: bool) -> Self {
-        self.0.huge_pages = on;
-        self.0.analysis = None;
-        self
-    }
 }
 
 impl Default for FaerLdlt {
@@ -704,65 +646,76 @@ impl FaerLdlt {
     pub fn new() -> Self {
         Self(CholeskyCore::new(Kind::Ldlt))
     }
-
-    /// Whether the last analysis chose faer's supernodal factorization, rather than its
-    /// simplicial one (`None` before the first analysis).
-    pub fn supernodal(&self) -> Option<bool> {
-        self.0.supernodal()
-    }
-
-    /// Sets faer's supernodal threshold (takes effect at the next analysis): supernodal
-    /// where the flops per factor entry exceed 40 times it; [`DEFAULT_SUPERNODAL_THRESHOLD`]
-    /// (default: a ratio of [`SUPERNODAL_FLOP_RATIO`]), 1 = faer's automatic choice,
-    /// 0 = always supernodal, `f64::INFINITY` = always simplicial.
-    pub fn with_supernodal_threshold(mut self, threshold: f64) -> Self {
-        self.0.supernodal_threshold = threshold;
-        self.0.analysis = None;
-        self
-    }
-
-    /// Sets the fill-reducing ordering (takes effect at the next analysis): AMD (default)
-    /// or METIS nested dissection; the backend's name gets a `-metis` suffix with METIS.
-    pub fn with_ordering(mut self, ordering: FillOrdering) -> Self {
-        self.0.ordering = ordering;
-        self.0.analysis = None;
-        self
-    }
-
-    /// The fill-reducing ordering in use.
-    pub fn ordering(&self) -> FillOrdering {
-        self.0.ordering
-    }
-
-    /// Number of threads for faer's numeric factorization and solve (default 1 =
-    /// sequential, bit-identical for any rayon pool; k > 1 passes `Par::rayon(k)`, which
-    /// parallelises inside the dense supernode kernels only and is not bit-identical to
-    /// the sequential run). Takes effect at the next analysis.
-    pub fn with_threads(mut self, threads: usize) -> Self {
-        self.0.threads = threads.max(1);
-        self.0.analysis = None;
-        self
-    }
-
-    /// Sets faer's supernode relaxation (amalgamation) thresholds: two adjacent
-    /// supernodes with `c` columns in total and a fraction `z` of explicit zeros after
-    /// merging are merged when `c <= relax[k].0 && z < relax[k].1` for some k. `None`
-    /// restores faer's defaults `[(4, 1.0), (16, 0.8), (48, 0.1), (usize::MAX, 0.05)]`.
-    /// Takes effect at the next analysis.
-    pub fn with_supernode_relaxation(mut self, relax: Option<Vec<(usize, f64)>>) -> Self {
-        self.0.relax = relax;
-        self.0.analysis = None;
-        self
-    }
-
-    /// Whether to ask Linux for transparent huge pages for the factor (default `true`).
-    /// Takes effect at the next analysis.
-    pub fn with_huge_pages(mut self, on: bool) -> Self {
-        self.0.huge_pages = on;
-        self.0.analysis = None;
-        self
-    }
 }
+
+/// The settings and queries of the backends on a [`CholeskyCore`] (field `.0`): one
+/// definition for [`FaerCholesky`] and [`FaerLdlt`].
+macro_rules! core_settings {
+    ($t:ty) => {
+        impl $t {
+            /// Whether the last analysis chose faer's supernodal factorization, rather than its
+            /// simplicial one (`None` before the first analysis).
+            pub fn supernodal(&self) -> Option<bool> {
+                self.0.supernodal()
+            }
+
+            /// Sets faer's supernodal threshold (takes effect at the next analysis):
+            /// supernodal where the flops per factor entry exceed 40 times it;
+            /// [`DEFAULT_SUPERNODAL_THRESHOLD`] (default: a ratio of
+            /// [`SUPERNODAL_FLOP_RATIO`]), 1 = faer's automatic choice, 0 = always
+            /// supernodal, `f64::INFINITY` = always simplicial.
+            pub fn with_supernodal_threshold(mut self, threshold: f64) -> Self {
+                self.0.supernodal_threshold = threshold;
+                self.0.analysis = None;
+                self
+            }
+
+            /// Sets the fill-reducing ordering (takes effect at the next analysis): AMD (default)
+            /// or METIS nested dissection; the backend's name gets a `-metis` suffix with METIS.
+            pub fn with_ordering(mut self, ordering: FillOrdering) -> Self {
+                self.0.ordering = ordering;
+                self.0.analysis = None;
+                self
+            }
+
+            /// The fill-reducing ordering in use.
+            pub fn ordering(&self) -> FillOrdering {
+                self.0.ordering
+            }
+
+            /// Number of threads for faer's numeric factorization and solve (default 1 =
+            /// sequential, bit-identical for any rayon pool; k > 1 passes `Par::rayon(k)`, which
+            /// parallelises inside the dense supernode kernels only and is not bit-identical to
+            /// the sequential run). Takes effect at the next analysis.
+            pub fn with_threads(mut self, threads: usize) -> Self {
+                self.0.threads = threads.max(1);
+                self.0.analysis = None;
+                self
+            }
+
+            /// Sets faer's supernode relaxation (amalgamation) thresholds: two adjacent
+            /// supernodes with `c` columns in total and a fraction `z` of explicit zeros after
+            /// merging are merged when `c <= relax[k].0 && z < relax[k].1` for some k. `None`
+            /// restores faer's defaults `[(4, 1.0), (16, 0.8), (48, 0.1), (usize::MAX, 0.05)]`.
+            /// Takes effect at the next analysis.
+            pub fn with_supernode_relaxation(mut self, relax: Option<Vec<(usize, f64)>>) -> Self {
+                self.0.relax = relax;
+                self.0.analysis = None;
+                self
+            }
+
+            /// Whether to ask Linux for transparent huge pages for the factor (default `true`).
+            /// Takes effect at the next analysis.
+            pub fn with_huge_pages(mut self, on: bool) -> Self {
+                self.0.huge_pages = on;
+                self.0.analysis = None;
+                self
+            }
+        }
+    };
+}
+core_settings!(FaerCholesky);
+core_settings!(FaerLdlt);
 
 macro_rules! chol_backend {
     ($t:ty, $name:literal, $metis_name:literal $(, $extra:item)*) => {

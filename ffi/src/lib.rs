@@ -1,14 +1,15 @@
 //! `dfem-ffi`: linear backends from outside Rust, each behind a cargo feature (issue 7):
 //!
-//! * `mumps`: [`mumps::Mumps`], MUMPS' multifrontal LDLᵀ / LU through a hand-written binding
-//!   of its C interface ([`mumps_sys`]).
-//! * `petsc`: [`petsc::Petsc`], PETSc's KSP (Krylov method + preconditioner chosen in
+//! * `mumps`: `mumps::Mumps`, MUMPS' multifrontal LDLᵀ / LU through a hand-written binding
+//!   of its C interface (`mumps_sys`).
+//! * `petsc`: `petsc::Petsc`, PETSc's KSP (Krylov method + preconditioner chosen in
 //!   PETSc's options database, default CG + GAMG with the rigid-body near-null space)
 //!   through bindgen.
 //! * `mpi`: under `mpirun`, the PETSc backend and (with `mumps`) MUMPS solve on every rank
 //!   together, each rank giving the rows of its part of dfem's block partition (MUMPS'
-//!   distributed input, ICNTL(18) = 3), see [`petsc`] and [`mumps`]; [`allgather`] and
-//!   [`process_rank`] serve dfem's distributed assembly.
+//!   distributed input, ICNTL(18) = 3), see the modules `petsc` and `mumps` (built with
+//!   their features); [`allgather`] and [`process_rank`] serve dfem's distributed
+//!   assembly.
 //!
 //! [`backend_from_name`] builds them by name; [`BACKENDS`] lists the names compiled in.
 //! Without features the crate is empty apart from the registry, which then explains which

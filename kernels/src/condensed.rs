@@ -14,7 +14,7 @@
 //!
 //! (Saad, *Iterative methods for sparse linear systems*, 2nd ed., §14.2): each block adds a
 //! dense clique on its boundary unknowns B_b (the Schur complement of its interior,
-//! computed by [`crate::partial`] on faer's symbolic structure, as the subdomains of
+//! computed by `crate::partial` (private) on faer's symbolic structure, as the subdomains of
 //! [`crate::substructure`]), and S is factorized by [`FaerCholesky`] (AMD), sparse.
 //!
 //! **What it saves.** In a nonlinear iteration of METHOD.md §4 only contacts change state,

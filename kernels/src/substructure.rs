@@ -21,7 +21,7 @@
 //!   interior Iᵢ (the rest of part i) and the interface unknowns Bᵢ coupled to it, ordered
 //!   with Iᵢ first (METIS nested dissection of Iᵢ by default, or AMD) and Bᵢ last,
 //!   one rayon task per subdomain: a partial factorization on faer's symbolic structure
-//!   ([`crate::partial`]) computes the interior columns \[Lᵢ,II; Lᵢ,BI\] of Kᵢ's
+//!   (`crate::partial`, private) computes the interior columns \[Lᵢ,II; Lᵢ,BI\] of Kᵢ's
 //!   Cholesky factor and stops before Bᵢ, leaving what the subdomain subtracts from
 //!   the interface, Cᵢ = A_BᵢIᵢ A_IᵢIᵢ⁻¹ A_IᵢBᵢ = Lᵢ,BI Lᵢ,BIᵀ (dense, |Bᵢ| × |Bᵢ|) —
 //!   no Cholesky of Kᵢ's trailing block;

@@ -15,7 +15,7 @@
 //!   segment (where joints cross, the blocks diagonal to each other touch only there).
 //!   A block landing flat on an edge gets contacts at the vertices of the common
 //!   stretch, so the edge-to-edge case of
-//!   [`crate::geometry::touching`] is the union of vertex-to-edge cases.
+//!   [`crate::geometry::joints::touching`] is the union of vertex-to-edge cases.
 //!
 //! Tributary length (the contact area is length × thickness, METHOD.md §3): half of each
 //! boundary segment adjoining the vertex that lies along the edge (its far end no more

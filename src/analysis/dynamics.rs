@@ -34,7 +34,7 @@
 //! contacts (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h, both while a contact is closed, sticking
 //! or slipping: the band's dashpots act in parallel with its friction slider, so that the
 //! shear force is continuous at the onset of slip; none when it is open, nor over a step
-//! at whose start the contact carried no force, [`DASHPOT_FORCE`]), plus the optional
+//! at whose start the contact carried no force, `DASHPOT_FORCE`), plus the optional
 //! Rayleigh a₀ M + a₁ K_s (K_s in the contact states at the step's start).
 //!
 //! Energy audit (J, all in the ground's frame): kinetic ½ vᵀMv; elastic energy of the
@@ -46,10 +46,11 @@
 //! for Newmark's average acceleration (which conserves energy); HHT and generalized-α
 //! add their numerical dissipation to it.
 //!
-//! Contacts are the ones found in the initial geometry ([`Mesh::contacts`]); the driver
-//! keeps the pattern, and with it the symbolic factorization, for the whole run. A
-//! re-detection of contacts between steps would rebuild [`System`] and the buffers in
-//! [`Dynamics::retopologize`] — the seam left for large motions with new contacts.
+//! Contacts are first those found in the initial geometry ([`Mesh::contacts`]). After
+//! each converged step the driver looks for new ones and drops far-separated ones
+//! (`Dynamics::update_contacts`, [`super::contact_search`]); only when the set changed
+//! does it rebuild [`System`], the pattern and the buffers, and with them the symbolic
+//! factorization at the next solve (`contact_topologies` in the summary).
 
 use super::checkpoint::Checkpoint;
 use super::config::{evaluate, secant_local, tangent_local, Committed, Trial};
@@ -172,10 +173,10 @@ const LINE_SEARCH_STEPS: usize = 4;
 pub enum Start {
     /// `"static"` (default): the elastic equilibrium of gravity and the loads (every
     /// contact sticking) with the contact forces returned to their strength
-    /// ([`Dynamics::preload`]): what is out of balance after the return acts at t = 0.
+    /// (`Dynamics::preload`): what is out of balance after the return acts at t = 0.
     Elastic,
     /// `"equilibrium"`: the static equilibrium of gravity and the loads under the
-    /// joints' law, as a static analysis finds it ([`Dynamics::settle`]); where the
+    /// joints' law, as a static analysis finds it (`Dynamics::settle`); where the
     /// structure cannot stand, the elastic start above (the blocks that cannot stand
     /// start moving).
     Equilibrium,
@@ -240,8 +241,8 @@ pub struct Settings {
     /// forces.
     pub start: Start,
     /// Recompute the acceleration after a step in which a contact opened or closed
-    /// ([`Dynamics::filtered_acceleration`]), and redo a step in which a loaded contact
-    /// lets go without its force at the start ([`Dynamics::release`], docs/theory.md
+    /// (`Dynamics::filtered_acceleration`), and redo a step in which a loaded contact
+    /// lets go without its force at the start (`Dynamics::release`, docs/theory.md
     /// "Impacts"); `impact_reset = false` turns both off.
     pub reset_on_impact: bool,
     /// Keep the inertia M ü (default). `inertia = false`: the seed's pseudo-dynamic
@@ -249,7 +250,7 @@ pub struct Settings {
     /// Euler, the ground motion entering only through the body force −M ι a_g(t).
     pub inertia: bool,
     /// Error-controlled step (`adaptive_tolerance`, m): the largest local error of a
-    /// step's node displacements allowed ([`Dynamics::step_error`]); `None`: steps of
+    /// step's node displacements allowed (`Dynamics::step_error`); `None`: steps of
     /// `dt` cut only when they do not converge or jump over an impact.
     pub adaptive: Option<f64>,
     /// `[analysis] frame = "absolute"`: the fixed blocks move with the ground (the
@@ -1016,7 +1017,7 @@ impl<'a> Dynamics<'a> {
     }
 
     /// The state after `step` completed time steps, for `dfem run --resume`
-    /// ([`checkpoint`]).
+    /// ([`super::checkpoint`]).
     pub fn checkpoint(&self, step: usize) -> Checkpoint {
         Checkpoint {
             step,

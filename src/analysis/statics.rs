@@ -60,12 +60,12 @@ pub struct Settings {
     pub bracket: f64,
     pub line_search: bool,
     /// Take the blocks of a local failure out of the analysis and go on without them
-    /// (`fallout`, default off; [`Driver::fall_out`]).
+    /// (`fallout`, default off; `Driver::fall_out`).
     pub fallout: bool,
     /// Keep the held secant factorization across load increments (`reuse_across_increments`,
     /// default off): the first corrections of an increment are then solved by conjugate
     /// gradients preconditioned with it, corrected for the contacts that changed state
-    /// ([`Driver::reuse`], docs/theory.md "Factorizations across increments"), instead of
+    /// (`Driver::reuse`, docs/theory.md "Factorizations across increments"), instead of
     /// a refactorization. Fewer factorizations, but on the walls of docs/performance.md no
     /// faster (P2) or never taken (10⁵ unknowns: hundreds of contacts change state
     /// between increments), hence off.

@@ -519,7 +519,7 @@ fn contact_element(g: &[[f64; 2]], k: &LocalStiffness, form: Form, ke: &mut [f64
 }
 
 /// Strain–displacement matrix B (1/m) of a CST and its area (m²), METHOD.md §2:
-/// B = 1/(2A) [[bᵢ,0,bⱼ,0,bₖ,0],[0,cᵢ,0,cⱼ,0,cₖ],[cᵢ,bᵢ,cⱼ,bⱼ,cₖ,bₖ]],
+/// B = 1/(2A) `[[bᵢ,0,bⱼ,0,bₖ,0],[0,cᵢ,0,cⱼ,0,cₖ],[cᵢ,bᵢ,cⱼ,bⱼ,cₖ,bₖ]]`,
 /// bᵢ = yⱼ − yₖ, cᵢ = xₖ − xⱼ (cyclic).
 pub fn cst_b(p: [Point; 3]) -> ([[f64; 6]; 3], f64) {
     let b = [p[1][1] - p[2][1], p[2][1] - p[0][1], p[0][1] - p[1][1]];
@@ -546,8 +546,8 @@ pub fn cst_stiffness(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
 
 /// CST stiffness Kₑ = A Bᵀ (t Dₑ) B (N/m, METHOD.md §2), its upper triangle packed by rows
 /// into `ke` (21 values (0,0), (0,1), …, (0,5), (1,1), …, (5,5); slots 2i and 2i + 1 are
-/// node i's x and y). B is sparse: node j's block of B is 1/(2A) [[bⱼ,0],[0,cⱼ],[cⱼ,bⱼ]]
-/// ([`cst_b`]), so K_ij = 1/(4A) [[bᵢ,0,cᵢ],[0,cᵢ,bᵢ]] (tDₑ) [[bⱼ,0],[0,cⱼ],[cⱼ,bⱼ]]: 14
+/// node i's x and y). B is sparse: node j's block of B is 1/(2A) `[[bⱼ,0],[0,cⱼ],[cⱼ,bⱼ]]`
+/// ([`cst_b`]), so K_ij = 1/(4A) `[[bᵢ,0,cᵢ],[0,cᵢ,bᵢ]]` (tDₑ) `[[bⱼ,0],[0,cⱼ],[cⱼ,bⱼ]]`: 14
 /// products per node for (tDₑ)Bⱼ/(4A), then 2 per entry, 84 in all (the dense triple
 /// product of [`cst_b`]'s matrices takes 324), and the lower triangle is not computed.
 #[inline(always)]
@@ -620,7 +620,7 @@ pub struct ContactMap {
 /// T that give δₙ, δₛ).
 ///
 /// A node-to-node contact (no `along`, every contact of the static driver) takes a direct
-/// route ([`node_to_node_map`]), bit-identical to the general one through
+/// route (`node_to_node_map`), bit-identical to the general one through
 /// [`Mesh::contact_maps`] and [`contact_gradient`]: the static driver computes the map of
 /// every contact that carries a force at every trial of its iterations.
 pub fn contact_map(mesh: &Mesh, c: &Contact) -> ContactMap {

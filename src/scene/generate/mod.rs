@@ -4,7 +4,7 @@
 //! `type`, `name`, `material`, `base_material`, `kind`, `mesh_size`) and returns blocks.
 //!
 //! One module per generator: [`incline`], [`wall`] (also used by [`tower`]), [`arch`],
-//! [`slope`], [`tunnel`]; [`common`] holds the parameter parsing and the polygon helpers
+//! [`slope`], [`tunnel`]; `common` holds the parameter parsing and the polygon helpers
 //! (all polygon cutting goes through `geo::BooleanOps`).
 
 pub mod arch;

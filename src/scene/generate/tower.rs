@@ -1,5 +1,5 @@
 //! `tower`: a masonry tower section, a tall narrow running-bond wall on a fixed base
-//! (built by [`super::wall::build`]).
+//! (built by `super::wall::build`).
 
 use serde::Deserialize;
 

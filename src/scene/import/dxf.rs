@@ -3,7 +3,7 @@
 //! (ixmilia/dxf-rs, MIT); this module only picks the polylines.
 //!
 //! A polyline is closed when its closed flag (group code 70, bit 1) is set or when its last
-//! vertex lies on its first (within [`CLOSE`] of its size; the repeated vertex is dropped).
+//! vertex lies on its first (within `CLOSE` of its size; the repeated vertex is dropped).
 //! Arc segments (a non-zero bulge, group code 42) are refused: a block's edges are
 //! straight. Polygon meshes and polyface meshes (POLYLINE flags 16 and 64) are skipped,
 //! as are open polylines and every other entity.

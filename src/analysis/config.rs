@@ -208,7 +208,8 @@ pub fn moved_reusing(
     (m, du)
 }
 
-/// Evaluate the increment `dq` from the configuration `cur` and the committed state.
+/// Evaluate the increment `dq` from the configuration `cur` and the committed state
+/// ([`Inputs::evaluate`]).
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     system: &System,
@@ -220,93 +221,110 @@ pub fn evaluate(
     dq: &[f64],
     presc: &[Point],
 ) -> Trial {
-    evaluate_reusing(
-        system, cur, committed, law, area, thickness, dq, presc, None,
-    )
+    Inputs {
+        system,
+        cur,
+        committed,
+        law,
+        area,
+        thickness,
+    }
+    .evaluate(dq, presc)
 }
 
-/// [`evaluate`], the moved configuration written into `spare` if given
-/// ([`moved_reusing`]).
-#[allow(clippy::too_many_arguments)]
-pub fn evaluate_reusing(
-    system: &System,
-    cur: &Mesh,
-    committed: &Committed,
-    law: &dyn ContactLaws,
-    area: &[f64],
-    thickness: f64,
-    dq: &[f64],
-    presc: &[Point],
-    spare: Option<Mesh>,
-) -> Trial {
-    use rayon::prelude::*;
-    let (mesh, du) = moved_reusing(cur, dq, presc, spare);
-    let n = cur.n_dofs;
-    // triangles: co-rotational CST
-    let stress: Vec<[f64; 3]> = (0..cur.triangles.len())
-        .into_par_iter()
-        .with_min_len(256)
-        .map(|t| triangle_stress(system, cur, committed, thickness, &du, t))
-        .collect();
-    // internal force vector, serial in element order (deterministic): the triangles
-    let mut f_int = vec![0.0; n];
-    for (t, s) in stress.iter().enumerate() {
-        add_triangle_force(&mesh, thickness, t, s, &mut f_int);
+/// What the evaluation of a trial increment reads besides the increment: the model, the
+/// configuration it moves from and its committed state, the contacts' laws and areas
+/// (m²) and the plane thickness (m).
+#[derive(Clone, Copy)]
+pub struct Inputs<'a> {
+    pub system: &'a System,
+    pub cur: &'a Mesh,
+    pub committed: &'a Committed,
+    pub law: &'a dyn ContactLaws,
+    pub area: &'a [f64],
+    pub thickness: f64,
+}
+
+impl Inputs<'_> {
+    /// Evaluate the increment `dq` (m, rad) with the prescribed translations `presc` (m)
+    /// of the fixed blocks.
+    pub fn evaluate(&self, dq: &[f64], presc: &[Point]) -> Trial {
+        self.evaluate_reusing(dq, presc, None)
     }
-    // the contacts: their laws, and their shares of F_int (METHOD.md §3: Fₙ gₙ + Fₛ gₛ on
-    // each free unknown, with the map of the moved configuration), computed in parallel
-    // into place, a slice of contacts at a time (1.2 MB of shares whatever the model's
-    // size); the shares added serially in contact order after the triangles: the same
-    // sums as adding them one contact at a time, bit for bit, for any number of threads
-    const SLICE: usize = 8192;
-    use crate::assembly::ContactShare;
-    let nc = cur.contacts.len();
-    let mut force = vec![[0.0; 2]; nc];
-    let mut state = vec![ContactState::Stick; nc];
-    let mut rel = vec![[0.0; 2]; nc];
-    let mut history: Vec<crate::material::History> = vec![[0.0; 2]; nc];
-    let mut shares = vec![ContactShare::NONE; SLICE.min(nc)];
-    for start in (0..nc).step_by(SLICE) {
-        let end = (start + SLICE).min(nc);
-        let part = &mut shares[..end - start];
-        part.par_iter_mut()
-            .zip(&mut force[start..end])
-            .zip(&mut state[start..end])
-            .zip(&mut rel[start..end])
-            .zip(&mut history[start..end])
+
+    /// [`Inputs::evaluate`], the moved configuration written into `spare` if given
+    /// ([`moved_reusing`]).
+    pub fn evaluate_reusing(&self, dq: &[f64], presc: &[Point], spare: Option<Mesh>) -> Trial {
+        use rayon::prelude::*;
+        let inputs = self;
+        let cur = inputs.cur;
+        let (mesh, du) = moved_reusing(cur, dq, presc, spare);
+        let n = cur.n_dofs;
+        // triangles: co-rotational CST
+        let stress: Vec<[f64; 3]> = (0..cur.triangles.len())
+            .into_par_iter()
             .with_min_len(256)
-            .enumerate()
-            .for_each(|(i, ((((share, f), st), d), h))| {
-                let c = contact_update(&mesh, cur, committed, law, area, &du, start + i, share);
-                (*f, *st, *d, *h) = c;
-            });
-        for share in part.iter() {
-            share.add_to(&mut f_int);
+            .map(|t| triangle_stress(inputs, &du, t))
+            .collect();
+        // internal force vector, serial in element order (deterministic): the triangles
+        let mut f_int = vec![0.0; n];
+        for (t, s) in stress.iter().enumerate() {
+            add_triangle_force(&mesh, inputs.thickness, t, s, &mut f_int);
         }
-    }
-    Trial {
-        mesh,
-        stress,
-        force,
-        state,
-        f_int,
-        dq: dq.to_vec(),
-        rel,
-        history,
+        // the contacts: their laws, and their shares of F_int (METHOD.md §3: Fₙ gₙ + Fₛ gₛ on
+        // each free unknown, with the map of the moved configuration), computed in parallel
+        // into place, a slice of contacts at a time (1.2 MB of shares whatever the model's
+        // size); the shares added serially in contact order after the triangles: the same
+        // sums as adding them one contact at a time, bit for bit, for any number of threads
+        const SLICE: usize = 8192;
+        use crate::assembly::ContactShare;
+        let nc = cur.contacts.len();
+        let mut force = vec![[0.0; 2]; nc];
+        let mut state = vec![ContactState::Stick; nc];
+        let mut rel = vec![[0.0; 2]; nc];
+        let mut history: Vec<crate::material::History> = vec![[0.0; 2]; nc];
+        let mut shares = vec![ContactShare::NONE; SLICE.min(nc)];
+        for start in (0..nc).step_by(SLICE) {
+            let end = (start + SLICE).min(nc);
+            let part = &mut shares[..end - start];
+            part.par_iter_mut()
+                .zip(&mut force[start..end])
+                .zip(&mut state[start..end])
+                .zip(&mut rel[start..end])
+                .zip(&mut history[start..end])
+                .with_min_len(256)
+                .enumerate()
+                .for_each(|(i, ((((share, f), st), d), h))| {
+                    (*f, *st, *d, *h) = contact_update(inputs, &mesh, &du, start + i, share);
+                });
+            for share in part.iter() {
+                share.add_to(&mut f_int);
+            }
+        }
+        Trial {
+            mesh,
+            stress,
+            force,
+            state,
+            f_int,
+            dq: dq.to_vec(),
+            rel,
+            history,
+        }
     }
 }
 
 /// The Cauchy stress (σxx, σyy, σxy) (Pa) of triangle `t` after the nodes' displacement
-/// increments `du` (m) from the configuration `cur`: the co-rotational CST of
+/// increments `du` (m) from the configuration `inputs.cur`: the co-rotational CST of
 /// [`evaluate`].
-fn triangle_stress(
-    system: &System,
-    cur: &Mesh,
-    committed: &Committed,
-    thickness: f64,
-    du: &[Point],
-    t: usize,
-) -> [f64; 3] {
+fn triangle_stress(inputs: &Inputs, du: &[Point], t: usize) -> [f64; 3] {
+    let Inputs {
+        system,
+        cur,
+        committed,
+        thickness,
+        ..
+    } = *inputs;
     let tri = cur.triangles[t];
     let x0 = tri.map(|k| cur.nodes[k as usize]);
     let (b0, _) = cst_b(x0);
@@ -358,27 +376,25 @@ fn add_triangle_force(mesh: &Mesh, thickness: f64, t: usize, s: &[f64; 3], f_int
     }
 }
 
-/// Contact `k`'s law after the nodes' displacement increments `du` (m) from `cur`: its
-/// force (N), state, relative displacement increment in its frame (m) and history, its
-/// share of F_int on the moved configuration `mesh` written into `share`.
-#[allow(clippy::too_many_arguments)]
+/// Contact `k`'s law after the nodes' displacement increments `du` (m) from
+/// `inputs.cur`: its force (N), state, relative displacement increment in its frame (m)
+/// and history, its share of F_int on the moved configuration `mesh` written into `share`.
 fn contact_update(
+    inputs: &Inputs,
     mesh: &Mesh,
-    cur: &Mesh,
-    committed: &Committed,
-    law: &dyn ContactLaws,
-    area: &[f64],
     du: &[Point],
     k: usize,
     share: &mut crate::assembly::ContactShare,
 ) -> ([f64; 2], ContactState, [f64; 2], crate::material::History) {
-    let c = &cur.contacts[k];
+    let committed = inputs.committed;
+    let c = &inputs.cur.contacts[k];
     let r = sub(du[c.node_m as usize], c.at_l(|n| du[n as usize]));
     let d = in_contact_frame(c.normal, r);
     let h0 = committed.history.get(k).copied().unwrap_or([0.0; 2]);
-    let (f, st, h) = law
+    let (f, st, h) = inputs
+        .law
         .law(k)
-        .update_history(area[k], committed.force[k], h0, d);
+        .update_history(inputs.area[k], committed.force[k], h0, d);
     if f != [0.0, 0.0] {
         share.set(&crate::assembly::contact_map(mesh, &mesh.contacts[k]), f);
     } else {
@@ -425,45 +441,42 @@ pub struct PartTrial {
     pub f_int: Vec<f64>,
 }
 
-/// [`evaluate_reusing`] for the elements of `part` only: the moved configuration, the
-/// part's contacts' forces and the internal force vector of the part's elements. At the
-/// unknowns of blocks whose elements are all in the part ([`Part::of_blocks`]) it is
+/// [`Inputs::evaluate_reusing`] for the elements of `part` only: the moved configuration,
+/// the part's contacts' forces and the internal force vector of the part's elements. At
+/// the unknowns of blocks whose elements are all in the part ([`Part::of_blocks`]) it is
 /// [`evaluate`]'s F_int to the bit: the same terms, added in the same order (triangles,
 /// then contacts, each ascending).
-#[allow(clippy::too_many_arguments)]
-pub fn evaluate_part(
-    system: &System,
-    cur: &Mesh,
-    committed: &Committed,
-    law: &dyn ContactLaws,
-    area: &[f64],
-    thickness: f64,
-    dq: &[f64],
-    presc: &[Point],
-    spare: Option<Mesh>,
-    part: &Part,
-) -> PartTrial {
-    let (mesh, du) = moved_reusing(cur, dq, presc, spare);
-    let mut f_int = vec![0.0; cur.n_dofs];
-    for &t in &part.triangles {
-        let s = triangle_stress(system, cur, committed, thickness, &du, t);
-        add_triangle_force(&mesh, thickness, t, &s, &mut f_int);
-    }
-    let mut share = crate::assembly::ContactShare::NONE;
-    let (force, rel) = part
-        .contacts
-        .iter()
-        .map(|&k| {
-            let (f, _, d, _) = contact_update(&mesh, cur, committed, law, area, &du, k, &mut share);
-            share.add_to(&mut f_int);
-            (f, d)
-        })
-        .unzip();
-    PartTrial {
-        mesh,
-        force,
-        rel,
-        f_int,
+impl Inputs<'_> {
+    pub fn evaluate_part(
+        &self,
+        dq: &[f64],
+        presc: &[Point],
+        spare: Option<Mesh>,
+        part: &Part,
+    ) -> PartTrial {
+        let inputs = self;
+        let (mesh, du) = moved_reusing(inputs.cur, dq, presc, spare);
+        let mut f_int = vec![0.0; inputs.cur.n_dofs];
+        for &t in &part.triangles {
+            let s = triangle_stress(inputs, &du, t);
+            add_triangle_force(&mesh, inputs.thickness, t, &s, &mut f_int);
+        }
+        let mut share = crate::assembly::ContactShare::NONE;
+        let (force, rel) = part
+            .contacts
+            .iter()
+            .map(|&k| {
+                let (f, _, d, _) = contact_update(inputs, &mesh, &du, k, &mut share);
+                share.add_to(&mut f_int);
+                (f, d)
+            })
+            .unzip();
+        PartTrial {
+            mesh,
+            force,
+            rel,
+            f_int,
+        }
     }
 }
 
@@ -564,9 +577,15 @@ mod tests {
             let part = Part::of_blocks(&mesh, &blocks);
             assert!(!part.contacts.is_empty() && part.contacts.len() < mesh.contacts.len());
             assert_eq!(rigid, part.triangles.is_empty());
-            let got = evaluate_part(
-                &system, &mesh, &committed, &law, &area, t, &dq, &presc, None, &part,
-            );
+            let inputs = Inputs {
+                system: &system,
+                cur: &mesh,
+                committed: &committed,
+                law: &law,
+                area: &area,
+                thickness: t,
+            };
+            let got = inputs.evaluate_part(&dq, &presc, None, &part);
             let mut checked = 0;
             for b in (0..mesh.blocks.len()).filter(|&b| blocks[b]) {
                 let dofs = mesh.block_unknowns(b);

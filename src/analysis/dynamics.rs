@@ -53,7 +53,7 @@
 //! factorization at the next solve (`contact_topologies` in the summary).
 
 use super::checkpoint::Checkpoint;
-use super::config::{evaluate, secant_local, tangent_local, Committed, Trial};
+use super::config::{secant_local, tangent_local, Committed, Inputs, Trial};
 use super::contact_search;
 use super::statics::OpenFlips;
 use super::{fit_motion, Outcome, Stats, Status};
@@ -887,16 +887,11 @@ impl<'a> Dynamics<'a> {
             return Ok(());
         }
         let presc = vec![[0.0; 2]; self.cur.blocks.len()];
-        let el = evaluate(
-            &self.system,
-            &self.cur,
-            &self.committed,
-            &self.law.elastic,
-            &self.area,
-            self.scene.model.thickness,
-            &x,
-            &presc,
-        );
+        let el = Inputs {
+            law: &self.law.elastic,
+            ..self.inputs()
+        }
+        .evaluate(&x, &presc);
         self.committed.u = x;
         self.committed.stress = el.stress;
         self.committed.force = el.force;
@@ -1116,16 +1111,21 @@ impl<'a> Dynamics<'a> {
                 _ => [0.0; 2],
             })
             .collect();
-        evaluate(
-            &self.system,
-            &self.cur,
-            &self.committed,
-            &self.law,
-            &self.area,
-            self.scene.model.thickness,
-            dq,
-            &presc,
-        )
+        self.inputs().evaluate(dq, &presc)
+    }
+
+    /// What a trial of this driver evaluates against ([`Inputs`]): its model, the
+    /// configuration at the step's start and its committed state, the contacts' laws and
+    /// areas.
+    fn inputs(&self) -> Inputs<'_> {
+        Inputs {
+            system: &self.system,
+            cur: &self.cur,
+            committed: &self.committed,
+            law: &self.law,
+            area: &self.area,
+            thickness: self.scene.model.thickness,
+        }
     }
 
     /// The out-of-balance force of a trial increment `dq` of a step (METHOD.md §6, the

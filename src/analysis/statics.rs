@@ -6,7 +6,7 @@
 //! capacity analysis brackets the critical load factor between the last converged and
 //! the first failed increment.
 
-use super::config::{evaluate, secant_local, tangent_local, Committed, Trial};
+use super::config::{secant_local, tangent_local, Committed, Inputs, Trial};
 use super::mechanism::{classify, Mechanism};
 use super::progress::{Increment, Progress};
 use super::{Outcome, Stats, Status};
@@ -658,17 +658,7 @@ impl<'a> Driver<'a> {
     /// from the true law's force mapped into the internal forces.
     fn trial(&self, dq: &[f64], presc: &[Point]) -> Trial {
         let spare = self.spare.lock().unwrap_or_else(|e| e.into_inner()).pop();
-        let mut t = super::config::evaluate_reusing(
-            &self.system,
-            &self.cur,
-            &self.committed,
-            &self.law,
-            &self.area,
-            self.scene.model.thickness,
-            dq,
-            presc,
-            spare,
-        );
+        let mut t = self.inputs().evaluate_reusing(dq, presc, spare);
         self.held_contacts(
             &t.mesh,
             Some,
@@ -678,6 +668,19 @@ impl<'a> Driver<'a> {
             &mut t.f_int,
         );
         t
+    }
+
+    /// What a trial of this driver evaluates against ([`Inputs`]): its model, the last
+    /// converged configuration and state, the contacts' laws and areas.
+    fn inputs(&self) -> Inputs<'_> {
+        Inputs {
+            system: &self.system,
+            cur: &self.cur,
+            committed: &self.committed,
+            law: &self.law,
+            area: &self.area,
+            thickness: self.scene.model.thickness,
+        }
     }
 
     /// The contacts held by the contact-state corrector take the force of their frozen law
@@ -694,59 +697,41 @@ impl<'a> Driver<'a> {
         state: Option<&mut [ContactState]>,
         f_int: &mut [f64],
     ) {
-        // contact k (slot i) now carries `f` in state `s`: `delta`, the change of its
-        // force, mapped into f_int
-        let mut set = |i: usize, k: usize, f: [f64; 2], s: ContactState, delta: [f64; 2]| {
-            if delta != [0.0, 0.0] {
-                let map = crate::assembly::contact_map(mesh, &mesh.contacts[k]);
-                crate::assembly::add_mapped_force(&map, delta, f_int);
-            }
-            (i, f, s)
-        };
-        let mut changes = Vec::new();
-        for (k, fr) in self.frozen.iter().enumerate() {
-            let (Some(fr), Some(i)) = (fr, slot(k)) else {
-                continue;
+        // contact k (slot i) now carries `f` in state `s`, the change of its force mapped
+        // into f_int
+        let mut state = state;
+        let mut hold =
+            |i: usize, k: usize, f: [f64; 2], s: ContactState, force: &mut [[f64; 2]]| {
+                let delta = [f[0] - force[i][0], f[1] - force[i][1]];
+                if delta != [0.0, 0.0] {
+                    let map = crate::assembly::contact_map(mesh, &mesh.contacts[k]);
+                    crate::assembly::add_mapped_force(&map, delta, f_int);
+                }
+                force[i] = f;
+                if let Some(st) = state.as_deref_mut() {
+                    st[i] = s;
+                }
             };
-            let fa = fr.force(rel[i]);
-            let delta = [fa[0] - force[i][0], fa[1] - force[i][1]];
-            changes.push(set(i, k, fa, fr.state, delta));
-        }
-        for &(i, f, _) in &changes {
-            force[i] = f;
+        for (k, fr) in self.frozen.iter().enumerate() {
+            if let (Some(fr), Some(i)) = (fr, slot(k)) {
+                hold(i, k, fr.force(rel[i]), fr.state, force);
+            }
         }
         for &k in &self.fallen_contacts {
-            let Some(i) = slot(k) else { continue };
-            let f = force[i];
-            changes.push(set(i, k, [0.0, 0.0], ContactState::Open, [-f[0], -f[1]]));
-            force[i] = [0.0, 0.0];
-        }
-        if let Some(st) = state {
-            for (i, _, s) in changes {
-                st[i] = s;
+            if let Some(i) = slot(k) {
+                hold(i, k, [0.0, 0.0], ContactState::Open, force);
             }
         }
     }
 
     /// The internal forces (N) of [`Driver::trial`] for the increment `dq`, computed from
-    /// the elements of `part` only ([`super::config::evaluate_part`]; the frozen and
+    /// the elements of `part` only ([`Inputs::evaluate_part`]; the frozen and
     /// fallen contacts of the part adjusted as in `trial`): at the unknowns of the blocks
     /// `part` was made for ([`super::config::Part::of_blocks`]) `trial`'s F_int to the
     /// bit, at the cost of the part's elements.
     fn f_int_of_part(&self, dq: &[f64], presc: &[Point], part: &super::config::Part) -> Vec<f64> {
         let spare = self.spare.lock().unwrap_or_else(|e| e.into_inner()).pop();
-        let mut t = super::config::evaluate_part(
-            &self.system,
-            &self.cur,
-            &self.committed,
-            &self.law,
-            &self.area,
-            self.scene.model.thickness,
-            dq,
-            presc,
-            spare,
-            part,
-        );
+        let mut t = self.inputs().evaluate_part(dq, presc, spare, part);
         self.held_contacts(
             &t.mesh,
             |k| part.contacts.binary_search(&k).ok(),
@@ -1406,16 +1391,11 @@ impl<'a> Driver<'a> {
                 laws: self.law.laws.iter().map(JointLaw::elastic).collect(),
                 of: self.law.of.clone(),
             };
-            let t = evaluate(
-                &self.system,
-                &self.cur,
-                &self.committed,
-                &elastic,
-                &self.area,
-                self.scene.model.thickness,
-                &dq,
-                presc,
-            );
+            let t = Inputs {
+                law: &elastic,
+                ..self.inputs()
+            }
+            .evaluate(&dq, presc);
             let mut x = self.out_of_balance(f_ext, &t.f_int);
             if self.solve_k0(&mut x)? {
                 for (a, b) in dq.iter_mut().zip(&x) {

@@ -403,7 +403,7 @@ fn contact_update(
     (f, st, d, h)
 }
 
-/// Which elements an [`evaluate_part`] evaluates: triangles and contacts, ascending.
+/// Which elements an [`Inputs::evaluate_part`] evaluates: triangles and contacts, ascending.
 #[derive(Debug, Clone, Default)]
 pub struct Part {
     pub triangles: Vec<usize>,
@@ -430,7 +430,7 @@ impl Part {
     }
 }
 
-/// A trial increment evaluated on a [`Part`]'s elements ([`evaluate_part`]).
+/// A trial increment evaluated on a [`Part`]'s elements ([`Inputs::evaluate_part`]).
 pub struct PartTrial {
     pub mesh: Mesh,
     /// The part's contacts' forces (N) and relative displacement increments (m), in the

@@ -17,7 +17,7 @@
 //!
 //! with Newmark's a₁ = (Δu − h v₀ − h²(½ − β) a₀)/(β h²), v₁ = v₀ + h((1−γ) a₀ + γ a₁).
 //! The unknown of a step is its increment Δu, evaluated by the same co-rotational CST
-//! and contact return map as the static driver ([`evaluate`]); the contact states are
+//! and contact return map as the static driver ([`Inputs::evaluate`]); the contact states are
 //! iterated within the step with the secant stiffness (METHOD.md §4), the effective
 //! matrix being (1−α_m)/(βh²) M + (1−α_f) γ/(βh) C + (1−α_f) K_s — positive definite
 //! even when blocks separate, thanks to the mass. The geometry is updated after every

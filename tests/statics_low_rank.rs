@@ -124,8 +124,10 @@ fn rigid_wall_same_results_with_the_factor_kept_across_increments() {
     let on = {
         let mut sc = off.clone();
         sc.analysis
-            .extra
-            .insert("reuse_across_increments".into(), toml::Value::Boolean(true));
+            .settings
+            .statics_mut()
+            .expect("a static scene")
+            .reuse_across_increments = true;
         sc
     };
     let with = run(&on, FaerCholesky::new());

@@ -55,33 +55,20 @@
 use super::checkpoint::Checkpoint;
 use super::config::{secant_local, tangent_local, Committed, Inputs, Trial};
 use super::contact_search;
-use super::statics::OpenFlips;
+use super::solver::{self, IterationControls, OpenFlips};
 use super::{fit_motion, Outcome, Stats, Status};
 use crate::assembly::{loads, mass, LocalStiffness, System};
 use crate::geometry::polygon::Point;
 use crate::material::{block_elastic, ContactLaw, ContactSprings, ContactState, MohrCoulomb};
 use crate::mesh::{BlockDofs, Mesh};
-use crate::scene::ground_motion::{self, Frame};
-use crate::scene::Scene;
+use crate::scene::ground_motion;
+use crate::scene::{AnalysisSettings, Scene, StaticSettings};
 use crate::solve::LinearBackend;
-use crate::{Error, Result};
+use crate::Result;
 use dfem_kernels::CsrMatrix;
 use std::time::Instant;
 
-/// Keys of `[analysis]` read by this driver (besides `dt`, `duration`, `ground_motion`).
-pub const KEYS: &[&str] = &[
-    "integrator",
-    "alpha",
-    "rho_inf",
-    "rayleigh",
-    "tolerance",
-    "max_iterations",
-    "max_cuts",
-    "initial",
-    "impact_reset",
-    "inertia",
-    "adaptive_tolerance",
-];
+mod step_try;
 
 /// Open/closed changes of a contact within a step after which its normal spring stays
 /// in the matrix (see [`Dynamics::step`]).
@@ -120,11 +107,6 @@ const STALL_PROGRESS: f64 = 0.5;
 const START_GEOMETRY_TURN: f64 = 1e-3;
 /// Factor on that spring per iteration the contact stays open.
 const OPEN_WEIGHT_DECAY: f64 = 0.1;
-/// Default halvings of a time step before the run is declared failed: impacts in a
-/// collapse need steps of Δt/2⁶–Δt/2¹⁰ (the arch of examples/seed_arch at Δt = 0.01 s:
-/// voussoirs landing at 6 m/s on a band of 5 mm, see `Dynamics::too_fast`), reached only
-/// while they last (the step doubles back after each converged one).
-const MAX_CUTS: f64 = 12.0;
 /// Open/closed changes of a contact within a try of a step after which it is held open
 /// for the rest of the try's iterations: in a try of the smallest length (`max_cuts`
 /// halvings) whatever its force, in any other where it never carried more than
@@ -168,185 +150,7 @@ const HELD_PENETRATION: f64 = 0.1;
 /// Step lengths tried by the line search of a step's iterations: 1, 1/2, …, 1/8.
 const LINE_SEARCH_STEPS: usize = 4;
 
-/// The state a dynamic run starts from at t = 0 (`[analysis] initial`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Start {
-    /// `"static"` (default): the elastic equilibrium of gravity and the loads (every
-    /// contact sticking) with the contact forces returned to their strength
-    /// (`Dynamics::preload`): what is out of balance after the return acts at t = 0.
-    Elastic,
-    /// `"equilibrium"`: the static equilibrium of gravity and the loads under the
-    /// joints' law, as a static analysis finds it (`Dynamics::settle`); where the
-    /// structure cannot stand, the elastic start above (the blocks that cannot stand
-    /// start moving).
-    Equilibrium,
-    /// `"rest"`: no contact force; gravity applied at t = 0.
-    Rest,
-}
-
-/// Parameters of a member of the generalized-α family.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Scheme {
-    pub alpha_m: f64,
-    pub alpha_f: f64,
-    pub beta: f64,
-    pub gamma: f64,
-}
-
-impl Scheme {
-    /// Newmark's average acceleration (trapezoidal rule): no numerical damping.
-    pub fn newmark() -> Scheme {
-        Scheme {
-            alpha_m: 0.0,
-            alpha_f: 0.0,
-            beta: 0.25,
-            gamma: 0.5,
-        }
-    }
-    /// HHT-α, 0 ≤ α ≤ ⅓ (Hilber's α with the opposite sign).
-    pub fn hht(alpha: f64) -> Scheme {
-        Scheme {
-            alpha_m: 0.0,
-            alpha_f: alpha,
-            beta: 0.25 * (1.0 + alpha).powi(2),
-            gamma: 0.5 + alpha,
-        }
-    }
-    /// Generalized-α with spectral radius ρ∞ ∈ [0, 1] at infinite frequency.
-    pub fn generalized_alpha(rho_inf: f64) -> Scheme {
-        let am = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0);
-        let af = rho_inf / (rho_inf + 1.0);
-        Scheme {
-            alpha_m: am,
-            alpha_f: af,
-            beta: 0.25 * (1.0 - am + af).powi(2),
-            gamma: 0.5 - am + af,
-        }
-    }
-}
-
-/// Settings of the dynamic driver (`[analysis]` keys).
-#[derive(Debug, Clone)]
-pub struct Settings {
-    pub scheme: Scheme,
-    pub dt: f64,
-    pub duration: f64,
-    /// Rayleigh coefficients a₀ (1/s) and a₁ (s).
-    pub rayleigh: [f64; 2],
-    pub tolerance: f64,
-    pub max_iterations: usize,
-    pub max_cuts: usize,
-    /// The state at t = 0 (`initial`): the elastic equilibrium of gravity returned to the
-    /// strength (default), the static equilibrium under the joints' law, or zero contact
-    /// forces.
-    pub start: Start,
-    /// Recompute the acceleration after a step in which a contact opened or closed
-    /// (`Dynamics::filtered_acceleration`), and redo a step in which a loaded contact
-    /// lets go without its force at the start (`Dynamics::release`, docs/theory.md
-    /// "Impacts"); `impact_reset = false` turns both off.
-    pub reset_on_impact: bool,
-    /// Keep the inertia M ü (default). `inertia = false`: the seed's pseudo-dynamic
-    /// analysis (its §4.2 end, §4.3): C u̇ + F_int(u) = F(t), integrated by backward
-    /// Euler, the ground motion entering only through the body force −M ι a_g(t).
-    pub inertia: bool,
-    /// Error-controlled step (`adaptive_tolerance`, m): the largest local error of a
-    /// step's node displacements allowed (`Dynamics::step_error`); `None`: steps of
-    /// `dt` cut only when they do not converge or jump over an impact.
-    pub adaptive: Option<f64>,
-    /// `[analysis] frame = "absolute"`: the fixed blocks move with the ground (the
-    /// prescribed motion of the foundation) instead of the ground-motion load on the free
-    /// blocks ([`Frame`]).
-    pub absolute: bool,
-}
-
-impl Settings {
-    pub fn from_scene(scene: &Scene) -> Result<Settings> {
-        let x = &scene.analysis.extra;
-        let place = super::analysis_place;
-        let num = |k: &str, d: f64, lo: f64, hi: f64| super::analysis_number(scene, k, d, lo, hi);
-        let scheme = match x.get("integrator").map(|v| v.as_str()) {
-            None | Some(Some("hht")) => Scheme::hht(num("alpha", 0.05, 0.0, 1.0 / 3.0)?),
-            Some(Some("newmark")) => Scheme::newmark(),
-            Some(Some("generalized-alpha")) => {
-                Scheme::generalized_alpha(num("rho_inf", 0.8, 0.0, 1.0)?)
-            }
-            _ => {
-                return Err(Error::new("unknown integrator")
-                    .place(place("integrator"))
-                    .fix("use \"newmark\", \"hht\" or \"generalized-alpha\""))
-            }
-        };
-        let rayleigh = match x.get("rayleigh") {
-            None => [0.0, 0.0],
-            Some(v) => {
-                let r: Option<Vec<f64>> = v.as_array().map(|a| {
-                    a.iter()
-                        .map(|v| {
-                            v.as_float()
-                                .or_else(|| v.as_integer().map(|i| i as f64))
-                                .unwrap_or(f64::NAN)
-                        })
-                        .collect()
-                });
-                match r {
-                    Some(r) if r.len() == 2 && r.iter().all(|c| c.is_finite() && *c >= 0.0) => {
-                        [r[0], r[1]]
-                    }
-                    _ => {
-                        return Err(Error::new(
-                            "'rayleigh' must be two non-negative numbers [a0, a1]",
-                        )
-                        .place(place("rayleigh"))
-                        .fix("for example rayleigh = [0.1, 0.001] (C = a0 M + a1 K)"))
-                    }
-                }
-            }
-        };
-        let inertia = match x.get("inertia") {
-            None => true,
-            Some(v) => v.as_bool().ok_or_else(|| {
-                Error::new("'inertia' must be true or false")
-                    .place(place("inertia"))
-                    .fix("inertia = true (default: M ü kept) or false (pseudo-dynamic: C u̇ + F_int = F(t))")
-            })?,
-        };
-        // (without inertia refused by the scene reader)
-        let absolute = scene.analysis.frame == Frame::Absolute;
-        Ok(Settings {
-            scheme,
-            dt: scene.analysis.dt.unwrap_or(0.01),
-            duration: scene.analysis.duration.unwrap_or(0.0),
-            rayleigh,
-            tolerance: num("tolerance", 1e-6, 1e-14, 0.1)?,
-            max_iterations: num("max_iterations", 100.0, 1.0, 1e6)? as usize,
-            max_cuts: num("max_cuts", MAX_CUTS, 0.0, 30.0)? as usize,
-            inertia,
-            absolute,
-            adaptive: match x.get("adaptive_tolerance") {
-                None => None,
-                Some(_) => Some(num("adaptive_tolerance", 1e-6, 1e-15, 1.0)?),
-            },
-            reset_on_impact: match x.get("impact_reset") {
-                None => true,
-                Some(v) => v.as_bool().ok_or_else(|| {
-                    Error::new("'impact_reset' must be true or false")
-                        .place(place("impact_reset"))
-                        .fix("impact_reset = true (default) or false")
-                })?,
-            },
-            start: match x.get("initial").map(|v| v.as_str()) {
-                None | Some(Some("static")) => Start::Elastic,
-                Some(Some("equilibrium")) => Start::Equilibrium,
-                Some(Some("rest")) => Start::Rest,
-                _ => {
-                    return Err(Error::new("unknown initial state")
-                        .place(place("initial"))
-                        .fix("use \"static\" (elastic equilibrium of gravity returned to the joints' strength, default), \"equilibrium\" (static equilibrium of gravity under the joints' law) or \"rest\" (no contact force at t = 0)"))
-                }
-            },
-        })
-    }
-}
+pub use crate::scene::settings::{DynamicSettings as Settings, Scheme, Start};
 
 /// The time history of a dynamic run: `columns` names each value of a row.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -629,7 +433,7 @@ impl<'a> Dynamics<'a> {
         mesh: &'a Mesh,
         backend: &'a mut dyn LinearBackend,
     ) -> Result<Dynamics<'a>> {
-        let settings = Settings::from_scene(scene)?;
+        let settings = scene.analysis.settings.dynamics()?.clone();
         let system = System::for_dynamics(scene, mesh);
         // a failed factorization only says "singular" here: no LDLᵀ for its pivot's value
         backend.set_failed_pivot_value(false);
@@ -837,7 +641,10 @@ impl<'a> Dynamics<'a> {
         scene.analysis.kind = crate::scene::AnalysisType::Static;
         scene.analysis.lateral = 0.0;
         scene.analysis.ground_motion.clear();
-        scene.analysis.extra.retain(|k, _| k == "tolerance");
+        scene.analysis.settings = AnalysisSettings::Static(StaticSettings {
+            tolerance: self.settings.tolerance,
+            ..StaticSettings::default()
+        });
         for b in &mut scene.blocks {
             b.prescribed = None;
         }
@@ -1294,234 +1101,45 @@ impl<'a> Dynamics<'a> {
         // start from the committed state carried along by the ground (the first solve is
         // the linearized step: a predictor that moves stiff contacts would start far
         // from the answer)
-        let mut dq: Vec<f64> = match start {
+        let dq: Vec<f64> = match start {
             Some(s) => s.to_vec(),
             None => self.absolute_from_relative(&vec![0.0; n], dug),
         };
-        let mut trial = self.trial_moving(&dq, dug);
-        let mut prev_state = trial.state.clone();
-        let mut prev_force = trial.force.clone();
-        let mut flips = vec![0u32; trial.state.len()];
-        let mut slip_flips = vec![0u32; trial.state.len()];
-        let mut weight = vec![1.0f64; trial.state.len()];
-        let mut frozen = vec![false; trial.state.len()];
+        let trial = self.trial_moving(&dq, dug);
+        let contacts = trial.state.len();
         let size = {
             let b = crate::geometry::polygon::bbox(&self.cur.nodes);
             (b[2] - b[0]).hypot(b[3] - b[1]).max(1e-9)
         };
-        let mut bal = self.balance(&terms, &dq, &trial);
-        // per contact, the largest force (N) it carried closed in this try's iterations
-        let mut closed_max = vec![0.0f64; trial.state.len()];
-        // the out-of-balance norm of the last iteration (N), and whether its step was a
-        // tangent one
-        let mut last_rn = f64::INFINITY;
-        let mut last_tangent = false;
-        // the best out-of-balance norm so far (N) and the iteration that set it
-        let (mut best_rn, mut best_it) = (f64::INFINITY, 0);
-        let mut bonds_broken = false;
-        // the closed ↔ open changes that break bonds, counted only where the joints have a
-        // bond to break and the contact carries a force that matters on one side
-        let bonded = self.law.broken_bond([0.0; 2]).is_some();
-        let mut open_flips = OpenFlips::new(bonded, trial.state.len());
-        for it in 0..self.settings.max_iterations {
-            self.stats.iterations += 1;
-            let negligible = self.settings.tolerance * bal.scale;
-            open_flips.count(it, &trial, (&prev_state, &prev_force), negligible);
-            // secant stiffness and damping of the trial states (the contacts in the trial
-            // geometry, the blocks as `effective_into` says). A contact that keeps opening
-            // and closing within the step sits at the kink of its law (touching with no
-            // force: the chatter of a stiff contact), where the secant iteration cycles
-            // between the open and the closed linearization; its normal spring then stays
-            // in the matrix, weakened by a factor w that drops while the contact stays open
-            // (so that a contact that really separates is soon left free) and returns to 1
-            // when it closes.
-            for k in 0..flips.len() {
-                let open = trial.state[k] == ContactState::Open;
-                if it > 0 && open != (prev_state[k] == ContactState::Open) {
-                    flips[k] += 1;
-                }
-                let pair = [trial.state[k], prev_state[k]];
-                if it > 0
-                    && pair.contains(&ContactState::Stick)
-                    && pair.contains(&ContactState::Slip)
-                {
-                    slip_flips[k] += 1;
-                }
-                if flips[k] >= FLIPS_BEFORE_ELASTIC {
-                    weight[k] = if open {
-                        weight[k] * OPEN_WEIGHT_DECAY
-                    } else {
-                        1.0
-                    };
-                }
-                if !open {
-                    closed_max[k] = closed_max[k].max(trial.force[k][0].hypot(trial.force[k][1]));
-                }
-                if (last_resort || closed_max[k] <= HOLD_OPEN_FORCE * bal.scale)
-                    && flips[k] >= FREEZE_FLIPS
-                    && !frozen[k]
-                {
-                    if super::tracing() {
-                        eprintln!("  hold open: contact {k}");
-                    }
-                    frozen[k] = true;
-                    self.stats.held_open += 1;
-                }
-            }
-            if frozen
-                .iter()
-                .zip(&trial.state)
-                .any(|(f, s)| *f && *s != ContactState::Open)
-            {
-                hold_open(&mut trial, &frozen);
-                bal = self.balance(&terms, &dq, &trial);
-            }
-            let negligible = self.settings.tolerance * bal.scale;
-            let changed = trial
-                .state
-                .iter()
-                .zip(&prev_state)
-                .enumerate()
-                .any(|(k, (x, y))| {
-                    x != y
-                        && (trial.force[k][0].hypot(trial.force[k][1]) > negligible
-                            || prev_force[k][0].hypot(prev_force[k][1]) > negligible)
-                });
-            if super::tracing() {
-                eprintln!(
-                    "t {t0:.4} h {h:.3e} it {it} residual {:.3e}",
-                    bal.rn / bal.scale
-                );
-                for k in 0..trial.state.len() {
-                    if trial.state[k] != prev_state[k] {
-                        let c = &trial.mesh.contacts[k];
-                        eprintln!(
-                            "  contact {k} ({}-{}) {:?} -> {:?} force {:?} flips {} w {}",
-                            c.block_l,
-                            c.block_m,
-                            prev_state[k],
-                            trial.state[k],
-                            trial.force[k],
-                            flips[k],
-                            weight[k]
-                        );
-                    }
-                }
-            }
-            if it > 0 && bal.rn <= self.settings.tolerance * bal.scale && !changed {
-                return Ok(Some(Accepted {
-                    trial,
-                    v: bal.v1,
-                    a: bal.a1,
-                    f_visc: bal.fv1,
-                    h,
-                    ground: g1,
-                    ground_du: dug,
-                    ground_v1: vg1,
-                    frozen,
-                }));
-            }
-            if bal.rn < STALL_PROGRESS * best_rn {
-                (best_rn, best_it) = (bal.rn, it);
-            } else if !last_resort && it - best_it >= STALL_ITERATIONS {
-                if !bonds_broken && self.break_cycling_bonds(&open_flips, &frozen) {
-                    // the iterations cycled on bonds that cannot hold: go on with them
-                    // broken (once a try, as the static driver does)
-                    bonds_broken = true;
-                    trial = self.trial_moving(&dq, dug);
-                    if frozen.iter().any(|&f| f) {
-                        hold_open(&mut trial, &frozen);
-                    }
-                    bal = self.balance(&terms, &dq, &trial);
-                    (best_rn, best_it) = (f64::INFINITY, it);
-                    prev_state = trial.state.clone();
-                    prev_force = trial.force.clone();
-                    continue;
-                }
-                if super::tracing() {
-                    eprintln!("  stalled: no progress since iteration {best_it}");
-                }
-                self.stats.stalled_steps += 1;
-                return Ok(None);
-            }
-            prev_state = trial.state.clone();
-            prev_force = trial.force.clone();
-            // at the first iteration, the states of the last step (a contact exactly at
-            // its friction limit evaluates as sticking, but it was slipping)
-            let states = if it == 0 && start.is_none() {
-                &self.committed.state
-            } else {
-                &trial.state
-            };
-            // the contacts' local stiffness in the matrix: secant, but for the anti-chatter
-            // rules above
-            let secant: Vec<LocalStiffness> = (0..self.springs.len())
-                .map(|k| {
-                    if frozen[k] {
-                        return [[0.0; 2]; 2];
-                    }
-                    let mut l = secant_local(self.springs[k], states[k]);
-                    if flips[k] >= FLIPS_BEFORE_ELASTIC {
-                        l[0][0] = weight[k] * self.springs[k].kn;
-                    }
-                    if slip_flips[k] >= FLIPS_BEFORE_ELASTIC && states[k] != ContactState::Open {
-                        l[1][1] = self.springs[k].ks;
-                    }
-                    l
-                })
-                .collect();
-            // once no contact changes state, the step's problem is smooth but for the
-            // slipping contacts' friction, which depends on their normal force: the secant
-            // matrix leaves that out (and keeps kₛ on contacts that flipped between stick
-            // and slip), so its iterations may contract slowly (0.79 an iteration on the
-            // rocking drums of docs/performance.md, "Tangent steps in the dynamic driver");
-            // a tangent step closes them in one or two. Taken only where the secant
-            // iteration is slow ([`TANGENT_SLOW`]), and then until a state changes.
-            let tangent = it > 1
-                && !changed
-                && (last_tangent || bal.rn > TANGENT_SLOW * last_rn)
-                && (0..trial.state.len())
-                    .any(|k| !frozen[k] && trial.state[k] == ContactState::Slip);
-            last_rn = bal.rn;
-            let geometry = self.blocks_geometry(&trial.mesh);
-            let blocks = geometry.as_ref().map(|m| m.as_ref().unwrap_or(&trial.mesh));
-            self.effective_into(blocks, &trial.mesh, &secant, &trial.state, &terms, false);
-            if self.backend.factorize(&self.kbuf).is_err() {
-                return Ok(None);
-            }
-            // the tangent step where it lowers the out-of-balance force; else the secant step
-            let tangent_step = match tangent {
-                true => self
-                    .tangent_step(
-                        &trial, blocks, &secant, &frozen, &terms, &dq, &bal, it, dug, size,
-                    )
-                    .filter(|s| s.2.rn < bal.rn),
-                false => None,
-            };
-            last_tangent = tangent_step.is_some();
-            let found = match tangent_step {
-                Some(step) => Some(step),
-                None => {
-                    let mut x = bal.r.clone();
-                    if self.backend.solve(&mut x).is_err() || !x.iter().all(|v| v.is_finite()) {
-                        return Ok(None);
-                    }
-                    self.search(&terms, &dq, &x, &bal, it, &frozen, dug, size)
-                }
-            };
-            let Some((cand, t, b, last)) = found else {
-                return Ok(None);
-            };
-            dq = cand;
-            trial = t;
-            bal = if last {
-                b
-            } else {
-                // `cbuf` holds C of the last candidate tried: assemble it for the one kept
-                self.balance(&terms, &dq, &trial)
-            };
-        }
-        Ok(None)
+        let bal = self.balance(&terms, &dq, &trial);
+        let controls = IterationControls {
+            tolerance: self.settings.tolerance,
+            max_iterations: self.settings.max_iterations,
+            stall_progress: STALL_PROGRESS,
+        };
+        let mut step = step_try::StepTry {
+            d: self,
+            terms,
+            t0,
+            g1,
+            dug,
+            vg1,
+            last_resort,
+            started: start.is_some(),
+            dq,
+            trial,
+            bal,
+            flips: vec![0; contacts],
+            slip_flips: vec![0; contacts],
+            weight: vec![1.0; contacts],
+            frozen: vec![false; contacts],
+            closed_max: vec![0.0; contacts],
+            last_rn: f64::INFINITY,
+            last_tangent: false,
+            size,
+        };
+        let end = solver::iterate(&mut step, &controls)?;
+        Ok(step.finish(end))
     }
 
     /// The tangent step of [`Dynamics::step`] from `dq` and the line search along it: the

@@ -8,6 +8,7 @@ pub mod curve;
 pub mod dynamics;
 pub mod mechanism;
 pub mod progress;
+pub mod solver;
 pub mod statics;
 pub mod support;
 
@@ -296,32 +297,6 @@ pub(crate) fn tracing() -> bool {
     *TRACE.get_or_init(|| std::env::var_os("DFEM_TRACE").is_some())
 }
 
-/// Where an `[analysis]` key stands, for error messages.
-pub(crate) fn analysis_place(k: &str) -> String {
-    format!("[analysis] key '{k}'")
-}
-
-/// The number under `[analysis]` key `k`, `d` when absent; an error naming the key and
-/// the allowed range `[lo, hi]` when it is not a finite number in it.
-pub(crate) fn analysis_number(scene: &Scene, k: &str, d: f64, lo: f64, hi: f64) -> Result<f64> {
-    let Some(v) = scene.analysis.extra.get(k) else {
-        return Ok(d);
-    };
-    let f = v
-        .as_float()
-        .or_else(|| v.as_integer().map(|i| i as f64))
-        .unwrap_or(f64::NAN);
-    if f.is_finite() && f >= lo && f <= hi {
-        Ok(f)
-    } else {
-        Err(
-            Error::new(format!("'{k}' must be a number from {lo} to {hi}"))
-                .place(analysis_place(k))
-                .fix(format!("for example {k} = {d}")),
-        )
-    }
-}
-
 /// Springs of every contact under the elastic band law.
 pub fn elastic_springs(scene: &Scene, mesh: &Mesh) -> Vec<ContactSprings> {
     if mesh.contacts.is_empty() {
@@ -444,19 +419,4 @@ pub fn outcome_motion(mesh: &Mesh, block: usize, out: &Outcome) -> ([f64; 2], f6
         block,
         &out.node_disp[b.nodes.start as usize..b.nodes.end as usize],
     )
-}
-
-#[cfg(test)]
-mod tests {
-    /// Every `[analysis]` key a driver reads is one the scene reader accepts (a key
-    /// missing there is refused as unknown before the driver sees it).
-    #[test]
-    fn drivers_read_only_keys_the_scene_reader_accepts() {
-        for k in super::statics::KEYS.iter().chain(super::dynamics::KEYS) {
-            assert!(
-                crate::scene::parse::ANALYSIS_KEYS.contains(k),
-                "'{k}' is not in scene::parse::ANALYSIS_KEYS"
-            );
-        }
-    }
 }

@@ -9,6 +9,7 @@
 use super::config::{secant_local, tangent_local, Committed, Inputs, Trial};
 use super::mechanism::{classify, Mechanism};
 use super::progress::{Increment, Progress};
+use super::solver::{self, IterationControls, OpenFlips};
 use super::{Outcome, Stats, Status};
 use crate::assembly::{loads, LocalStiffness, System};
 use crate::geometry::polygon::Point;
@@ -16,207 +17,14 @@ use crate::material::{ContactLaw, ContactState, JointLaw, PerContact};
 use crate::mesh::Mesh;
 use crate::scene::{AnalysisType, Scene};
 use crate::solve::LinearBackend;
-use crate::{Error, Result};
+use crate::Result;
 use dfem_kernels::CsrMatrix;
 use std::time::Instant;
 
 pub mod arc_length;
+mod increment;
 
-/// The iteration strategy (`[analysis] strategy`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Strategy {
-    /// The elastic stiffness, factorized once: cheap solves, more iterations.
-    Initial,
-    /// The secant stiffness (open contacts carry nothing, slipping ones no shear),
-    /// numerically refactorized each iteration with the symbolic phase reused.
-    Secant,
-    /// Newton with the tangent (the friction term makes it nonsymmetric: LU).
-    Newton,
-}
-
-impl Strategy {
-    pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "initial" => Some(Strategy::Initial),
-            "secant" => Some(Strategy::Secant),
-            "newton" => Some(Strategy::Newton),
-            _ => None,
-        }
-    }
-}
-
-/// Settings of the nonlinear driver (`[analysis]` keys, with these defaults).
-#[derive(Debug, Clone)]
-pub struct Settings {
-    pub strategy: Strategy,
-    /// Relative out-of-balance tolerance ‖λF − F_int‖ / ‖λF‖.
-    pub tolerance: f64,
-    /// Iterations per increment before it is cut.
-    pub max_iterations: usize,
-    /// Halvings of an increment before the structure is declared failed.
-    pub max_cuts: usize,
-    /// Capacity: first step of the load factor, and the relative width of the final bracket.
-    pub initial_step: f64,
-    pub bracket: f64,
-    pub line_search: bool,
-    /// Take the blocks of a local failure out of the analysis and go on without them
-    /// (`fallout`, default off; `Driver::fall_out`).
-    pub fallout: bool,
-    /// Keep the held secant factorization across load increments (`reuse_across_increments`,
-    /// default off): the first corrections of an increment are then solved by conjugate
-    /// gradients preconditioned with it, corrected for the contacts that changed state
-    /// (`Driver::reuse`, docs/theory.md "Factorizations across increments"), instead of
-    /// a refactorization. Fewer factorizations, but on the walls of docs/performance.md no
-    /// faster (P2) or never taken (10⁵ unknowns: hundreds of contacts change state
-    /// between increments), hence off.
-    pub reuse_across_increments: bool,
-    /// Displacement control (`push_block`, `push_displacement`), if any.
-    pub push: Option<Push>,
-    /// Arc-length path following of the push (`path = "arc_length"`), if any.
-    pub arc: Option<arc_length::ArcLength>,
-}
-
-/// Displacement control of a static analysis: after gravity and the loads, the rigid
-/// block `block` is moved by `displacement` in `load_steps` equal increments with its
-/// rotation held (its top stays horizontal); its vertical motion is prescribed too when
-/// `vertical` is given, else free under the loads (a constant pre-compression). The force
-/// that holds the block on this path (N) is the load of the capacity curve.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Push {
-    pub block: usize,
-    /// Horizontal displacement (m).
-    pub horizontal: f64,
-    /// Vertical displacement (m); `None`: free.
-    pub vertical: Option<f64>,
-}
-
-impl Push {
-    /// The unit direction of the push in the plane and its length (m): the end of the
-    /// path along it ([1, 0] for a zero push).
-    pub(super) fn direction(&self) -> (Point, f64) {
-        let (h, v) = (self.horizontal, self.vertical.unwrap_or(0.0));
-        let length = h.hypot(v);
-        if length > 0.0 {
-            ([h / length, v / length], length)
-        } else {
-            ([1.0, 0.0], length)
-        }
-    }
-
-    fn from_scene(scene: &Scene) -> Result<Option<Push>> {
-        let x = &scene.analysis.extra;
-        let place = super::analysis_place;
-        let (name, disp) = match (x.get("push_block"), x.get("push_displacement")) {
-            (None, None) => return Ok(None),
-            (Some(b), Some(d)) => (b, d),
-            (Some(_), None) => {
-                return Err(Error::new("push_block is given without push_displacement")
-                    .place(place("push_block"))
-                    .fix("add push_displacement = <m> (horizontal, vertical free) or [<m>, <m>]"))
-            }
-            (None, Some(_)) => {
-                return Err(Error::new("push_displacement is given without push_block")
-                    .place(place("push_displacement"))
-                    .fix("add push_block = \"<name of the free rigid block to push>\""))
-            }
-        };
-        let name = name.as_str().ok_or_else(|| {
-            Error::new("push_block is not a block name")
-                .place(place("push_block"))
-                .fix("give the name of a block as a string, for example \"top\"")
-        })?;
-        let block = scene.block_index(name).ok_or_else(|| {
-            Error::new(format!("there is no block '{name}'"))
-                .place(place("push_block"))
-                .fix("name a block of the scene (generated walls call their top beam \"top\")")
-        })?;
-        let b = &scene.blocks[block];
-        if b.support != crate::scene::Support::Free || b.kind != crate::scene::BlockKind::Rigid {
-            return Err(Error::new(format!("block '{name}' is not a free rigid block"))
-                .place(place("push_block"))
-                .line(b.line)
-                .fix("push a free block of kind = \"rigid\" (a loading beam); fixed blocks move with their 'prescribed' key"));
-        }
-        let num = |v: &toml::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
-        let bad = || {
-            Error::new("push_displacement is not a displacement")
-                .place(place("push_displacement"))
-                .fix("give a finite number of m (horizontal; the vertical motion free) or [horizontal, vertical] in m")
-        };
-        let (horizontal, vertical) = match disp {
-            toml::Value::Array(a) if a.len() == 2 => {
-                let h = num(&a[0]).ok_or_else(bad)?;
-                let v = num(&a[1]).ok_or_else(bad)?;
-                (h, Some(v))
-            }
-            v => (num(v).ok_or_else(bad)?, None),
-        };
-        if !horizontal.is_finite() || !vertical.unwrap_or(0.0).is_finite() {
-            return Err(bad());
-        }
-        if scene.analysis.kind != AnalysisType::Static {
-            return Err(Error::new("displacement control belongs to a static analysis")
-                .place(place("push_block"))
-                .fix("set [analysis] type = \"static\" (the capacity analysis raises a load factor instead)"));
-        }
-        Ok(Some(Push {
-            block,
-            horizontal,
-            vertical,
-        }))
-    }
-}
-
-impl Settings {
-    pub fn from_scene(scene: &Scene) -> Result<Settings> {
-        let x = &scene.analysis.extra;
-        let place = super::analysis_place;
-        let strategy = match x.get("strategy") {
-            None => Strategy::Secant,
-            Some(v) => v.as_str().and_then(Strategy::parse).ok_or_else(|| {
-                Error::new("unknown strategy")
-                    .place(place("strategy"))
-                    .fix("use \"initial\", \"secant\" or \"newton\"")
-            })?,
-        };
-        let num = |k: &str, d: f64, lo: f64, hi: f64| super::analysis_number(scene, k, d, lo, hi);
-        // an `[analysis]` switch: true or false, `d` when absent
-        let switch = |k: &str, d: bool| -> Result<bool> {
-            match x.get(k) {
-                None => Ok(d),
-                Some(v) => v.as_bool().ok_or_else(|| {
-                    Error::new(format!("'{k}' must be true or false"))
-                        .place(place(k))
-                        .fix(format!("write {k} = true or {k} = false (default {d})"))
-                }),
-            }
-        };
-        let default_iters = if strategy == Strategy::Initial {
-            2000.0
-        } else {
-            300.0
-        };
-        Settings {
-            strategy,
-            tolerance: num("tolerance", 1e-6, 1e-14, 0.1)?,
-            max_iterations: num("max_iterations", default_iters, 1.0, 1e6)? as usize,
-            max_cuts: num("max_cuts", 6.0, 0.0, 30.0)? as usize,
-            initial_step: num("initial_step", 0.05, 1e-9, 1e3)?,
-            bracket: num("bracket", 1e-3, 1e-9, 0.5)?,
-            line_search: switch("line_search", strategy != Strategy::Initial)?,
-            fallout: switch("fallout", false)?,
-            reuse_across_increments: switch("reuse_across_increments", false)?,
-            push: Push::from_scene(scene)?,
-            arc: None,
-        }
-        .with_arc(scene)
-    }
-
-    fn with_arc(mut self, scene: &Scene) -> Result<Settings> {
-        self.arc = arc_length::ArcLength::from_scene(scene, self.push.as_ref())?;
-        Ok(self)
-    }
-}
+pub use crate::scene::settings::{Push, StaticSettings as Settings, Strategy};
 
 /// ε of the blended step K_s + ε K₀ taken when the secant matrix is singular.
 const BLEND: f64 = 1e-2;
@@ -248,25 +56,6 @@ const MODE_ACCEPT: f64 = 3.0;
 /// At most this many groups of free blocks move in one iteration (those with the largest
 /// out-of-balance force along their motion).
 const MODE_GROUPS: usize = 8;
-
-/// Keys of `[analysis]` read by this driver.
-pub const KEYS: &[&str] = &[
-    "strategy",
-    "tolerance",
-    "max_iterations",
-    "max_cuts",
-    "initial_step",
-    "bracket",
-    "line_search",
-    "fallout",
-    "reuse_across_increments",
-    "push_block",
-    "push_displacement",
-    "gravity_steps",
-    "path",
-    "arc_length",
-    "accept_residual",
-];
 
 /// The loads of one phase as functions of its load factor.
 struct Phase {
@@ -531,11 +320,6 @@ const STALL_ITERATIONS: usize = 60;
 /// failure that closes it is confirmed with the full windows.
 const PROBE_STALL_ITERATIONS: usize = 30;
 const PROBE_TANGENT_STALL_ITERATIONS: usize = 10;
-/// A bonded contact that has changed between closed and open this many times in an
-/// increment's iterations breaks ([`Driver::break_cycling_bonds`]): closed → open →
-/// closed → open. The dynamic driver breaks them likewise where a try stalls
-/// (`Dynamics::break_cycling_bonds`).
-const BOND_BREAK_FLIPS: u32 = 3;
 /// Step lengths 1, ½, ¼, ⅛ of the line search on the out-of-balance norm.
 const LINE_SEARCH_STEPS: usize = 4;
 /// Step lengths 1 … 2⁻¹¹ of the line search along the tangent step that replaces a secant
@@ -575,7 +359,7 @@ impl<'a> Driver<'a> {
         mesh: &Mesh,
         backend: &'a mut dyn LinearBackend,
     ) -> Result<Driver<'a>> {
-        let settings = Settings::from_scene(scene)?;
+        let settings = scene.analysis.settings.statics()?.clone();
         let system = System::new(scene, mesh);
         // a failed factorization only says "singular" here: no LDLᵀ for its pivot's value
         backend.set_failed_pivot_value(false);
@@ -1403,319 +1187,30 @@ impl<'a> Driver<'a> {
                 }
             }
         }
-        let mut trial = self.trial(&dq, presc);
-        let mut scale = self.force_scale(f_ext, &trial.f_int);
+        let trial = self.trial(&dq, presc);
+        let scale = self.force_scale(f_ext, &trial.f_int);
         let size = self.model_size();
-        let mut prev_state = trial.state.clone();
-        let mut prev_force = trial.force.clone();
-        let mut singular_streak = 0;
-        // the best out-of-balance norm so far and the iteration that set it
-        let mut best_rn = f64::INFINITY;
-        let mut best_it = 0;
-        let mut tangent_only = false;
-        // the closed ↔ open changes that break bonds, counted only where a joint has a
-        // bond to break ([`Driver::break_cycling_bonds`])
-        let bonded = self
-            .law
-            .laws
-            .iter()
-            .any(|l| l.broken_bond([0.0; 2]).is_some());
-        let mut open_flips = OpenFlips::new(bonded, trial.state.len());
-        let mut bonds_broken = false;
         self.gmres_failed = false;
-        for it in 0..self.settings.max_iterations {
-            self.stats.iterations += 1;
-            let negligible = self.settings.tolerance * scale;
-            open_flips.count(it, &trial, (&prev_state, &prev_force), negligible);
-            let r = self.out_of_balance(f_ext, &trial.f_int);
-            if !self.pins.is_empty() {
-                scale = self.force_scale(f_ext, &trial.f_int);
-            }
-            let rn = Self::norm(&r);
-            if let Some(p) = self.progress.as_deref_mut() {
-                p.iteration(it, rn / scale);
-            }
-            if super::tracing() {
-                eprintln!(
-                    "it {it} residual {:.3e} open {} slip {}",
-                    rn / scale,
-                    trial
-                        .state
-                        .iter()
-                        .filter(|s| **s == ContactState::Open)
-                        .count(),
-                    trial
-                        .state
-                        .iter()
-                        .filter(|s| **s == ContactState::Slip)
-                        .count()
-                );
-            }
-            // a state change counts only where the contact carries a force that matters at
-            // the tolerance: contacts with no force (head joints under gravity) flip with
-            // round-off
-            let negligible = self.settings.tolerance * scale;
-            self.converged_norm = negligible;
-            let matters = |k: usize| {
-                trial.force[k][0].hypot(trial.force[k][1]) > negligible
-                    || prev_force[k][0].hypot(prev_force[k][1]) > negligible
-            };
-            let changed = trial
-                .state
-                .iter()
-                .zip(&prev_state)
-                .enumerate()
-                .any(|(k, (a, b))| a != b && matters(k));
-            if super::tracing() {
-                // changes of state of the contacts that carry a force: stick→slip,
-                // slip→stick, closed→open, open→closed
-                let mut tr = [0usize; 4];
-                for (k, (a, b)) in trial.state.iter().zip(&prev_state).enumerate() {
-                    if a != b && matters(k) {
-                        tr[match (b, a) {
-                            (ContactState::Stick, ContactState::Slip) => 0,
-                            (ContactState::Slip, ContactState::Stick) => 1,
-                            (_, ContactState::Open) => 2,
-                            _ => 3,
-                        }] += 1;
-                    }
-                }
-                eprintln!(
-                    "  changes stick>slip {} slip>stick {} >open {} open> {}",
-                    tr[0], tr[1], tr[2], tr[3]
-                );
-            }
-            if (it > 0 || extrapolated) && rn <= self.settings.tolerance * scale && !changed {
-                self.report.iterations = it;
-                self.report.residual = rn / scale;
-                return Ok(Ok(trial));
-            }
-            if rn < STALL_PROGRESS * best_rn {
-                best_rn = rn;
-                best_it = it;
-            } else if it - best_it >= self.stall_window(tangent_only) {
-                if self.settings.strategy == Strategy::Secant && !tangent_only {
-                    // the secant iterations stagnate, which on large walls they do below
-                    // the limit load, a little above the tolerance (docs/performance.md,
-                    // "60×60 and 100×100 walls"): go on with tangent steps, which take the
-                    // friction's dependence on the normal force into account, before
-                    // declaring the load beyond what the contacts can hold
-                    tangent_only = true;
-                    self.stats.tangent_fallbacks += 1;
-                    if super::tracing() {
-                        eprintln!(
-                            "  secant stalled at it {it}: best {:.3e}, now {:.3e}: tangent steps",
-                            best_rn / scale,
-                            rn / scale
-                        );
-                    }
-                    best_it = it;
-                } else if !bonds_broken && self.break_cycling_bonds(&open_flips) {
-                    // the iterations cycled on bonds that cannot hold: go on with them
-                    // broken (once an increment: where they still stall the load is beyond
-                    // what the contacts can hold)
-                    bonds_broken = true;
-                    let t = self.trial(&dq, presc);
-                    self.recycle(std::mem::replace(&mut trial, t));
-                    (best_rn, best_it) = (f64::INFINITY, it);
-                    prev_state = trial.state.clone();
-                    prev_force = trial.force.clone();
-                    continue;
-                } else {
-                    // stagnation: the load is beyond what the contacts can hold from here
-                    if super::tracing() {
-                        eprintln!(
-                            "  stalled at it {it}: best {:.3e}, now {:.3e} (tangent steps: {tangent_only})",
-                            best_rn / scale,
-                            rn / scale
-                        );
-                    }
-                    break;
-                }
-            }
-            prev_state = trial.state.clone();
-            prev_force = trial.force.clone();
-            // the secant strategy takes a tangent step once the contact states have settled:
-            // with the states fixed the problem is linear but for the friction limit's
-            // dependence on the normal force, which the secant matrix leaves out (the
-            // secant iterations then contract by a constant factor, ~0.7 on the walls of
-            // docs/performance.md; the tangent step closes them in one or two)
-            let tangent = self.settings.strategy == Strategy::Newton
-                || tangent_only
-                || (self.settings.strategy == Strategy::Secant
-                    && it > 1
-                    && !changed
-                    && trial.state.contains(&ContactState::Slip));
-            // the first correction of an increment is built in the states the last increment
-            // converged in: at dq = 0 every contact reports its committed force, which reads
-            // as sticking even where it was open or slipping, and an all-sticking (elastic)
-            // predictor overshoots where the joints had opened
-            let states =
-                if it == 0 && !extrapolated && self.committed.state.len() == trial.state.len() {
-                    self.committed.state.clone()
-                } else {
-                    trial.state.clone()
-                };
-            // a correction of the size of the model comes from a matrix singular but for
-            // round-off (whether the factorization flags it depends on the backend's pivot
-            // threshold): treated as singular, so that the backends agree
-            let correction = self
-                .correction(&trial, &states, &r, tangent)?
-                .filter(|d| d.iter().all(|v| v.abs() <= 0.5 * size));
-            let delta = match correction {
-                Some(d) => {
-                    singular_streak = 0;
-                    d
-                }
-                None => {
-                    // the secant matrix is singular in the current states (a mechanism,
-                    // or a transient set of open contacts): step with K_s + ε K₀, stiffer
-                    // than the secant (so the iteration contracts, as the seed's
-                    // excess-force iteration with K₀ does) but much closer to it
-                    singular_streak += 1;
-                    match self.blended_step(&trial, &r, BLEND)? {
-                        Some(x) => x,
-                        None => {
-                            let mut x = r.clone();
-                            if !self.solve_k0(&mut x)? {
-                                return Ok(Err((
-                                    IncrementFailure::Divergence,
-                                    self.failure(dq, &trial, f_ext),
-                                )));
-                            }
-                            x
-                        }
-                    }
-                }
-            };
-            // line search on the out-of-balance norm
-            let mut best = self.line_search(&dq, &delta, rn, f_ext, presc, LINE_SEARCH_STEPS);
-            if super::tracing() {
-                eprintln!(
-                    "  step tangent {tangent} singular {singular_streak} ratio {:.3}",
-                    best.0 / rn
-                );
-            }
-            if tangent && best.0 >= rn {
-                // safeguarded Newton: where the tangent step does not reduce the
-                // out-of-balance force (slip/open cycling at a lightly loaded contact),
-                // take the secant step instead
-                let local = self.local_stiffness(&trial, &trial.state, false);
-                self.assemble_kbuf(local);
-                let mut x = r.clone();
-                let ok = self.backend.factorize(&self.kbuf).is_ok()
-                    && !super::singular_pivots(&*self.backend)
-                    && self.backend.solve(&mut x).is_ok()
-                    && x.iter().all(|v| v.is_finite());
-                self.hold_secant(&trial.state);
-                let x = if ok {
-                    Some(x)
-                } else {
-                    self.blended_step(&trial, &r, BLEND)?
-                };
-                if let Some(x) = x {
-                    let alt = self.line_search(&dq, &x, rn, f_ext, presc, LINE_SEARCH_STEPS);
-                    if alt.0 < best.0 {
-                        best = alt;
-                    }
-                }
-            } else if self.settings.strategy == Strategy::Secant
-                && singular_streak == 0
-                && best.0 >= rn
-            {
-                // safeguarded secant: a regular secant step that no step length makes
-                // reduce the out-of-balance force is not a descent direction (with many
-                // contacts slipping K_s is far from the Jacobian, which couples the
-                // friction to the normal force); take the tangent step where it does
-                if let Some(x) = self
-                    .correction(&trial, &states, &r, true)?
-                    .filter(|d| d.iter().all(|v| v.abs() <= 0.5 * size))
-                {
-                    // the tangent of the current states is the Jacobian where no contact
-                    // sits at a kink of its law, so a short enough step along it lowers
-                    // the norm: backtrack further than for the secant step
-                    let alt = self.line_search(&dq, &x, rn, f_ext, presc, SAFEGUARD_STEPS);
-                    if super::tracing() {
-                        eprintln!("  safeguard tangent ratio {:.3}", alt.0 / rn);
-                    }
-                    if alt.0 < best.0 {
-                        best = alt;
-                    }
-                }
-            }
-            if self.settings.line_search && best.0 >= rn {
-                // no step length lowered the norm, nor did the safeguards' other steps:
-                // the step length where the out-of-balance force stops working along the
-                // correction (see `slope_search`), taken whatever its norm
-                if let Some(alt) = self.slope_search(&dq, &delta, &r, &best.1.history, f_ext, presc)
-                {
-                    if super::tracing() {
-                        eprintln!(
-                            "  slope search: norm {:.3e} -> {:.3e}",
-                            best.0 / scale,
-                            alt.0 / scale
-                        );
-                    }
-                    self.recycle(std::mem::replace(&mut best, alt).1);
-                    self.stats.slope_searches += 1;
-                }
-            }
-            if singular_streak >= MODE_STREAK
-                && self.settings.strategy != Strategy::Initial
-                && best.0 > MODE_PROGRESS * rn
-            {
-                // the step moved little: blocks held only by slipping and open contacts
-                // carry an out-of-balance force that no contact of theirs resists (K_s is
-                // singular there) and the residual's norm does not fall along their free
-                // motion until one of those contacts sticks: search along that motion
-                if let Some(m) = self.blended_step(&trial, &r, MODE_BLEND)? {
-                    if let Some(moves) =
-                        self.free_motion(&best.2, &best.1.state, &m, &delta, f_ext, presc)
-                    {
-                        let mut cand = best.2.clone();
-                        for (i, v) in moves.into_iter().flatten() {
-                            cand[i] += v;
-                        }
-                        let t = self.trial(&cand, presc);
-                        let rn2 = Self::norm(&self.out_of_balance(f_ext, &t.f_int));
-                        if super::tracing() {
-                            eprintln!(
-                                "  free motion: norm {:.3e} -> {:.3e}",
-                                best.0 / scale,
-                                rn2 / scale
-                            );
-                        }
-                        if rn2 < MODE_ACCEPT * best.0 {
-                            best = (rn2, t, cand);
-                            self.stats.free_motions += 1;
-                        }
-                    }
-                }
-            }
-            let (_, t, cand) = best;
-            self.recycle(std::mem::replace(&mut trial, t));
-            dq = cand;
-            let dmax = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if !dmax.is_finite() || dmax > 0.5 * size {
-                return Ok(Err((
-                    IncrementFailure::Divergence,
-                    self.failure(dq, &trial, f_ext),
-                )));
-            }
-        }
-        let r = self.out_of_balance(f_ext, &trial.f_int);
-        let residual = Self::norm(&r) / scale;
-        // the mechanism: the null space of the secant matrix when it is singular, else
-        // the increment itself
-        let mode = if singular_streak > 0 && self.settings.strategy != Strategy::Initial {
-            self.mechanism_mode(&trial, &r)?
-        } else {
-            dq
+        let controls = IterationControls {
+            tolerance: self.settings.tolerance,
+            max_iterations: self.settings.max_iterations,
+            stall_progress: STALL_PROGRESS,
         };
-        Ok(Err((
-            IncrementFailure::NoConvergence { residual },
-            self.failure(mode, &trial, f_ext),
-        )))
+        let mut increment = increment::Increment {
+            d: self,
+            f_ext,
+            presc,
+            extrapolated,
+            dq,
+            trial,
+            r: Vec::new(),
+            scale,
+            size,
+            singular_streak: 0,
+            tangent_only: false,
+        };
+        let end = solver::iterate(&mut increment, &controls)?;
+        increment.finish(end)
     }
 
     fn failure(&self, mode: Vec<f64>, trial: &Trial, f_ext: &[f64]) -> Failure {
@@ -1744,7 +1239,7 @@ impl<'a> Driver<'a> {
 
     /// Breaks the bonds that cannot hold, where an increment's iterations stalled: every
     /// bonded contact (cohesion or tensile strength, intact) that went closed → open →
-    /// closed → open ([`BOND_BREAK_FLIPS`], `open_flips`: [`OpenFlips`]) in them
+    /// closed → open ([`solver::BOND_BREAK_FLIPS`], `open_flips`: [`OpenFlips`]) in them
     /// has its bond broken for good from there on (docs/theory.md, "Bonds that cannot
     /// hold"). Such a contact sits at the jump of its law: closed it carries a cohesive
     /// shear that its equilibrium holds only with the contact in tension, past its
@@ -2314,8 +1809,7 @@ pub fn run_with_progress<'a>(
     let steps = scene.analysis.load_steps;
     // increments of the gravity phase (`gravity_steps`, default `load_steps`): gravity on
     // a structure that stands is nearly linear and needs few
-    let gravity_steps =
-        super::analysis_number(scene, "gravity_steps", steps as f64, 1.0, 1e6)?.round() as usize;
+    let gravity_steps = d.settings.gravity_steps.unwrap_or(steps);
     let g = scene.model.gravity;
     let gnorm = g[0].hypot(g[1]);
     let n = mesh.n_dofs;
@@ -2472,7 +1966,7 @@ pub fn run_with_progress<'a>(
     // phase 3: displacement control
     if let Some(push) = d.settings.push {
         let crate::mesh::BlockDofs::Rigid { first, .. } = mesh.blocks[push.block].dofs else {
-            unreachable!("Push::from_scene admits rigid blocks only")
+            unreachable!("the scene reader admits rigid pushed blocks only")
         };
         let f = first as usize;
         let mut pin_step = vec![(f, push.horizontal), (f + 2, 0.0)];
@@ -2682,82 +2176,5 @@ pub fn run_with_progress<'a>(
             Ok(out)
         }
         AnalysisType::Dynamic => unreachable!("the dynamic driver runs elsewhere"),
-    }
-}
-
-/// Per contact, the changes between closed and open in the iterations of an increment
-/// (or of a try of a time step), counted where the contact carries a force that matters
-/// on one side: what breaks the bonds that cannot hold ([`BOND_BREAK_FLIPS`],
-/// [`Driver::break_cycling_bonds`] and the dynamic driver's
-/// `Dynamics::break_cycling_bonds`). Empty, counting nothing, where no joint has a bond
-/// to break.
-pub(super) struct OpenFlips(Vec<u32>);
-
-impl OpenFlips {
-    pub(super) fn new(bonded: bool, contacts: usize) -> Self {
-        OpenFlips(vec![0; if bonded { contacts } else { 0 }])
-    }
-
-    /// Count the changes from the last iteration's states `prev_state` (forces
-    /// `prev_force`) to `trial`'s, where the contact carries a force above `negligible`
-    /// (N) on one side; nothing at the first iteration (`it` = 0).
-    pub(super) fn count(
-        &mut self,
-        it: usize,
-        trial: &Trial,
-        (prev_state, prev_force): (&[ContactState], &[[f64; 2]]),
-        negligible: f64,
-    ) {
-        if it == 0 {
-            return;
-        }
-        let matters = |f: [f64; 2]| f[0].hypot(f[1]) > negligible;
-        for (k, flips) in self.0.iter_mut().enumerate() {
-            let open = trial.state[k] == ContactState::Open;
-            if open != (prev_state[k] == ContactState::Open)
-                && (matters(trial.force[k]) || matters(prev_force[k]))
-            {
-                *flips += 1;
-            }
-        }
-    }
-
-    /// Break the bond of every contact that changed [`BOND_BREAK_FLIPS`] times, is not
-    /// `skip`ped and whose bond `broken_bond(k, history)` breaks: its `history` set to
-    /// broken, the history it had pushed onto `broken` (to give back if the iterations
-    /// still fail). Whether any broke.
-    pub(super) fn break_bonds(
-        &self,
-        history: &mut [crate::material::History],
-        broken_bond: impl Fn(usize, crate::material::History) -> Option<crate::material::History>,
-        skip: impl Fn(usize) -> bool,
-        broken: &mut Vec<(usize, crate::material::History)>,
-    ) -> bool {
-        let mut broke = false;
-        for (k, &flips) in self.0.iter().enumerate() {
-            if flips < BOND_BREAK_FLIPS || k >= history.len() || skip(k) {
-                continue;
-            }
-            if let Some(b) = broken_bond(k, history[k]) {
-                if super::tracing() {
-                    eprintln!("  bond broken: contact {k} after {flips} changes");
-                }
-                broken.push((k, history[k]));
-                history[k] = b;
-                broke = true;
-            }
-        }
-        broke
-    }
-
-    /// Give the bonds broken by [`OpenFlips::break_bonds`] back to `history` (`broken`
-    /// emptied): the iterations they were broken in did not lead to a committed state.
-    pub(super) fn give_back(
-        history: &mut [crate::material::History],
-        broken: &mut Vec<(usize, crate::material::History)>,
-    ) {
-        for (k, h) in broken.drain(..) {
-            history[k] = h;
-        }
     }
 }

@@ -376,7 +376,7 @@ impl<'a> StreamWriter<'a> {
             kept.push_str(&history_line(r));
         }
         write_atomic(&path, kept.as_bytes())?;
-        let settings = crate::analysis::dynamics::Settings::from_scene(scene)?;
+        let settings = scene.analysis.settings.dynamics()?.clone();
         let every = scene.output.every.max(1);
         if !c.step.is_multiple_of(every) {
             // the final state an interrupted run wrote between two frames

@@ -10,8 +10,10 @@ pub mod generate;
 pub mod ground_motion;
 pub mod import;
 pub mod parse;
+pub mod settings;
 
 pub use parse::{load, parse_str};
+pub use settings::{AnalysisSettings, DynamicSettings, StaticSettings};
 
 /// 2D idealisation of the out-of-plane direction (METHOD.md section 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -226,9 +228,9 @@ pub struct Analysis {
     pub ground_motion: Vec<ground_motion::GroundMotion>,
     /// Dynamic: the frame the ground motion enters (`frame`).
     pub frame: ground_motion::Frame,
-    /// The `[analysis]` keys not interpreted by the foundation (ground motion, strategies);
-    /// kept verbatim for the drivers that read them.
-    pub extra: toml::Table,
+    /// The settings of the analysis type: the static driver's (static and capacity) or
+    /// the time integration's (dynamic), validated when the scene is read.
+    pub settings: AnalysisSettings,
 }
 
 /// `[output]`.

@@ -12,6 +12,9 @@ use serde::Deserialize;
 use std::path::Path;
 use toml::Spanned;
 
+mod analysis_settings;
+use analysis_settings::AnalysisTable;
+
 /// More blocks than this are refused before any work (a typo in a generator, usually).
 pub const MAX_BLOCKS: usize = 2_000_000;
 
@@ -139,9 +142,8 @@ struct RawOutput {
     checkpoint_every: Option<i64>,
 }
 
-/// Keys of `[analysis]` (the drivers of later analysis types read the rest from `extra`;
-/// their own lists, `analysis::statics::KEYS` and `analysis::dynamics::KEYS`, are checked
-/// against this one by a test in `analysis`).
+/// Keys of `[analysis]`: those of every analysis type (a key that the scene's type does
+/// not read is accepted and has no effect, docs/scene-reference.md "[analysis]").
 pub const ANALYSIS_KEYS: &[&str] = &[
     "type",
     "lateral",
@@ -976,7 +978,7 @@ fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
     }
 
     // [analysis]
-    let analysis = parse_analysis(&src, raw.analysis.as_ref(), file)?;
+    let analysis = parse_analysis(&src, raw.analysis.as_ref(), file, &blocks)?;
 
     // [output]
     let output = match &raw.output {
@@ -1445,6 +1447,7 @@ fn parse_analysis(
     src: &Src,
     a: Option<&Spanned<toml::Table>>,
     file: Option<&Path>,
+    blocks: &[Block],
 ) -> Result<Analysis> {
     let Some(a) = a else {
         return Ok(Analysis {
@@ -1456,7 +1459,7 @@ fn parse_analysis(
             duration: None,
             ground_motion: Vec::new(),
             frame: ground_motion::Frame::Relative,
-            extra: toml::Table::new(),
+            settings: AnalysisSettings::Static(StaticSettings::default()),
         });
     };
     let at = a.span().start;
@@ -1596,48 +1599,6 @@ fn parse_analysis(
             gm
         }
     };
-    let mut extra = t.clone();
-    for k in [
-        "type",
-        "lateral",
-        "load_steps",
-        "direction",
-        "dt",
-        "duration",
-        "ground_motion",
-        "frame",
-    ] {
-        extra.remove(k);
-    }
-    // the static driver's switches (read by `analysis::statics::Settings`, which checks
-    // them again for scenes built without a file): checked here to name their line
-    for k in ["line_search", "fallout", "reuse_across_increments"] {
-        if extra.get(k).is_some_and(|v| v.as_bool().is_none()) {
-            return Err(err_at(
-                src.key_line(at, k),
-                format!("[analysis] key '{k}'"),
-                format!("'{k}' must be true or false"),
-                format!("write {k} = true or {k} = false"),
-            ));
-        }
-    }
-    // the arc-length keys without an arc-length path (read by
-    // `analysis::statics::arc_length`, which checks them again): checked here to name
-    // their line
-    let arc = matches!(
-        extra.get("path").and_then(|v| v.as_str()),
-        Some("arc_length" | "dissipation")
-    );
-    for k in ["arc_length", "accept_residual"] {
-        if !arc && extra.contains_key(k) {
-            return Err(err_at(
-                src.key_line(at, k),
-                format!("[analysis] key '{k}'"),
-                format!("{k} is given but the path is not arc length"),
-                format!("add path = \"arc_length\" or \"dissipation\", or remove {k}"),
-            ));
-        }
-    }
     let frame = match t.get("frame") {
         None => ground_motion::Frame::Relative,
         Some(v) => {
@@ -1674,6 +1635,17 @@ fn parse_analysis(
             f
         }
     };
+    let keys = AnalysisTable { src, at, t };
+    let settings = match kind {
+        AnalysisType::Static | AnalysisType::Capacity => {
+            AnalysisSettings::Static(keys.statics(kind, blocks)?)
+        }
+        AnalysisType::Dynamic => AnalysisSettings::Dynamic(keys.dynamics(
+            dt.unwrap_or(0.01),
+            duration.unwrap_or(0.0),
+            frame,
+        )?),
+    };
     Ok(Analysis {
         kind,
         lateral,
@@ -1683,6 +1655,6 @@ fn parse_analysis(
         duration,
         ground_motion,
         frame,
-        extra,
+        settings,
     })
 }

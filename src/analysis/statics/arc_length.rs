@@ -43,6 +43,8 @@
 
 use super::*;
 
+mod path_step;
+
 /// Changes of state of a contact within one arc-length increment after which it is
 /// frozen at the chord of its law from its committed force (the contact-state corrector,
 /// docs/theory.md, Eq. F1; its secant the elastic springs): on the Eindhoven wall
@@ -53,85 +55,7 @@ use super::*;
 /// 2·10⁻⁶ and 7·10⁻⁵ of the load. Two instead of three stopped J6D at its old point.
 pub(super) const FLIP_LIMIT: u32 = 3;
 
-/// `[analysis] path = "arc_length"` and `arc_length` (m).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ArcLength {
-    /// Δl (m), the root-mean-square increment of the free unknowns; `None`: the length
-    /// whose elastic predictor moves the block by `push_displacement / load_steps` at the
-    /// first increment.
-    pub length: Option<f64>,
-    /// `path = "dissipation"`: the cylinder of Eq. A1 until the contacts start to
-    /// dissipate, then the energy dissipated per increment (Eq. A2).
-    pub dissipation: bool,
-    /// `accept_residual`: an increment that fails every constraint at its least step is
-    /// taken at its best iterate with the true laws when that iterate's relative
-    /// out-of-balance force is at most this (0: never, the default). The force left is
-    /// carried into the next increment, whose iterations remove it (the out-of-balance
-    /// force is always that of the total state); `summary.json` counts such increments
-    /// and their largest force (`curve.path.accepted`).
-    pub accept: f64,
-}
-
-impl ArcLength {
-    /// The path-following settings of a scene: `None` for displacement control.
-    pub fn from_scene(scene: &Scene, push: Option<&Push>) -> Result<Option<ArcLength>> {
-        let x = &scene.analysis.extra;
-        let place = super::super::analysis_place;
-        let path = match x.get("path") {
-            None => None,
-            Some(v) => Some(v.as_str().ok_or_else(|| {
-                Error::new("path is not a string").place(place("path")).fix(
-                    "give path = \"displacement\" (the default), \"arc_length\" or \"dissipation\"",
-                )
-            })?),
-        };
-        let (arc, dissipation) = match path {
-            None | Some("displacement") => (false, false),
-            Some("arc_length") => (true, false),
-            Some("dissipation") => (true, true),
-            Some(other) => return Err(Error::new(format!("unknown path \"{other}\""))
-                .place(place("path"))
-                .fix(
-                    "give path = \"displacement\" (the default), \"arc_length\" or \"dissipation\"",
-                )),
-        };
-        if !arc {
-            for key in ["arc_length", "accept_residual"] {
-                if x.contains_key(key) {
-                    return Err(Error::new(format!(
-                        "{key} is given but the path is not arc length"
-                    ))
-                    .place(place(key))
-                    .fix(format!(
-                        "add path = \"arc_length\" or \"dissipation\", or remove {key}"
-                    )));
-                }
-            }
-            return Ok(None);
-        }
-        if push.is_none() {
-            return Err(Error::new("arc-length path following needs a pushed block")
-                .place(place("path"))
-                .fix("add push_block = \"<free rigid block>\" and push_displacement = <m> (the end of the path), or remove path"));
-        }
-        let length = match x.get("arc_length") {
-            None => None,
-            Some(_) => Some(super::super::analysis_number(
-                scene,
-                "arc_length",
-                0.0,
-                1e-15,
-                1e3,
-            )?),
-        };
-        let accept = super::super::analysis_number(scene, "accept_residual", 0.0, 0.0, 0.1)?;
-        Ok(Some(ArcLength {
-            length,
-            dissipation,
-            accept,
-        }))
-    }
-}
+pub use crate::scene::settings::ArcLength;
 
 /// The set-up of the arc-length push: the unknowns of the block, P̂ and the pins.
 struct Setup {
@@ -146,7 +70,7 @@ struct Setup {
 
 fn setup(d: &Driver, push: &Push) -> Setup {
     let crate::mesh::BlockDofs::Rigid { first, .. } = d.cur.blocks[push.block].dofs else {
-        unreachable!("Push::from_scene admits rigid blocks only")
+        unreachable!("the scene reader admits rigid pushed blocks only")
     };
     let f = first as usize;
     let (dir, target) = push.direction();
@@ -691,7 +615,7 @@ impl Driver<'_> {
         // snap-backs; the dissipation taken as proportional to the increment), or at the
         // first increment the secant matrix's response to P̂
         let mut dq = vec![0.0; n];
-        let mut dlam;
+        let dlam;
         // the previous increment's scale factor, or None for a fresh predictor: a push
         // increment is scaled only from a previous one that moved the block forward
         let scaled = previous.and_then(|(prev, _, prev_d)| match constraint {
@@ -741,191 +665,35 @@ impl Driver<'_> {
         self.flips = vec![0; self.cur.contacts.len()];
         // the caller clears it after the increment
         self.frozen = vec![None; self.cur.contacts.len()];
-        let mut prev_state: Option<Vec<ContactState>> = None;
-        let (mut best_rn, mut best_it) = (f64::INFINITY, 0);
-        let mut residual = f64::INFINITY;
-        // the out-of-balance force with the true laws at the last check of Eq. F2 (N)
-        let mut last_check = f64::INFINITY;
-        // the checks of Eq. F2 in a row that have not lowered it
-        let mut stuck = 0;
-        let mut carried: Option<Trial> = None;
-        // `accept_residual`: the best iterate with the true laws, kept only when asked
+        let trial = self.trial(&dq, &zero);
+        let controls = IterationControls {
+            tolerance: self.settings.tolerance,
+            max_iterations: self.settings.max_iterations,
+            stall_progress: STALL_PROGRESS,
+        };
         let keep = self.settings.arc.is_some_and(|a| a.accept > 0.0);
-        let mut best_true: Option<Box<Unconverged>> = None;
-        for it in 0..self.settings.max_iterations {
-            self.stats.iterations += 1;
-            let fe = f_ext(lam0 + dlam);
-            // the trial of the iterate, which the backtracking of the last correction
-            // evaluated (the frozen laws have not changed since)
-            let mut trial = match carried.take() {
-                Some(t) => t,
-                None => self.trial(&dq, &zero),
-            };
-            let mut r = self.out_of_balance(&fe, &trial.f_int);
-            let mut scale = self.force_scale(&fe, &trial.f_int);
-            let mut rn = Self::norm(&r);
-            if rn <= self.settings.tolerance * scale && self.frozen.iter().any(Option::is_some) {
-                // converged with contacts frozen: the true laws decide (Eq. F2)
-                let held = std::mem::take(&mut self.frozen);
-                let truth = self.trial(&dq, &zero);
-                let r_true = self.out_of_balance(&fe, &truth.f_int);
-                let s_true = self.force_scale(&fe, &truth.f_int);
-                let rn_true = Self::norm(&r_true);
-                if keep {
-                    Unconverged::keep(&mut best_true, rn_true / s_true, &truth, dlam);
-                }
-                let n_frozen = held.iter().filter(|f| f.is_some()).count();
-                if super::super::tracing() {
-                    eprintln!(
-                        "arc corrector: converged with {n_frozen} contacts frozen at {:.3e}; with the true laws {:.3e}",
-                        rn / scale,
-                        rn_true / s_true
-                    );
-                }
-                // the chords to this point (regula falsi on the kinks)
-                self.frozen = held
-                    .iter()
-                    .enumerate()
-                    .map(|(k, f)| f.map(|_| self.freeze(k, &truth)))
-                    .collect();
-                self.stats.contact_releases += 1;
-                (trial, r, scale, rn) = (truth, r_true, s_true, rn_true);
-                if rn > self.settings.tolerance * scale {
-                    if (rn - last_check).abs() <= CHECK_SAME * last_check {
-                        // the chords of the last check led back to the same point:
-                        // regula falsi makes no progress (J6D converged 300 times with
-                        // one contact frozen at 9.468·10⁻⁴ with the true laws)
-                        stuck += 1;
-                        if stuck >= CHECK_LIMIT {
-                            return Ok(Err(StepFailure::NoConvergence(rn / scale, best_true)));
-                        }
-                    } else {
-                        stuck = 0;
-                    }
-                    last_check = rn;
-                    // go on from here, the frozen laws now the chords to this point
-                    // (their forces the true ones): a new start for the stall test
-                    best_rn = f64::INFINITY;
-                } else {
-                    self.frozen.iter_mut().for_each(|f| *f = None);
-                }
-            }
-            residual = rn / scale;
-            if keep && self.frozen.iter().all(Option::is_none) {
-                Unconverged::keep(&mut best_true, residual, &trial, dlam);
-            }
-            if let Some(pr) = self.progress.as_deref_mut() {
-                pr.iteration(it, residual);
-            }
-            if let Some(ps) = &prev_state {
-                for (c, (a, b)) in self.flips.iter_mut().zip(ps.iter().zip(&trial.state)) {
-                    *c += u32::from(a != b);
-                }
-                // the contact-state corrector: a contact that keeps changing state at a
-                // kink of its law is frozen in the state it has now (Eq. F1)
-                for k in 0..self.flips.len() {
-                    if self.flips[k] >= FLIP_LIMIT && self.frozen[k].is_none() {
-                        self.frozen[k] = Some(self.freeze(k, &trial));
-                    }
-                }
-                if super::super::tracing() {
-                    for (k, (a, b)) in ps
-                        .iter()
-                        .zip(&trial.state)
-                        .enumerate()
-                        .filter(|(_, (a, b))| a != b)
-                        .take(4)
-                    {
-                        eprintln!(
-                            "  flip {k} at {:?}: {a:?} -> {b:?} ({} flips), force {:?}, Δδ {:?}, law {:?}",
-                            self.cur.nodes[self.cur.contacts[k].node_m as usize],
-                            self.flips[k],
-                            trial.force[k],
-                            trial.rel[k],
-                            self.law.get(k).springs(self.area[k])
-                        );
-                    }
-                }
-            }
-            if super::super::tracing() {
-                eprintln!(
-                    "arc it {it} residual {residual:.3e} load {:.6e}",
-                    lam0 + dlam
-                );
-            }
-            // converged on the out-of-balance force alone: the forces are the laws' at
-            // the iterate, so a small residual is equilibrium whatever states the last
-            // iterate had (at the kink of a law the two states give the same force, and
-            // the iterates step from one side to the other by 10⁻¹¹ m)
-            if rn <= self.settings.tolerance * scale {
-                let dissipated = self.dissipated(&trial);
-                let accept = match constraint {
-                    Constraint::Cylinder(_) => it > 0,
-                    Constraint::Dissipation(tau) => {
-                        it > 0 || dissipated >= PREDICTOR_DISSIPATION * tau
-                    }
-                    // the predictor moves the block by Δa: it meets the constraint
-                    Constraint::Push(_) => true,
-                };
-                if accept {
-                    self.report.iterations = it;
-                    self.report.residual = residual;
-                    return Ok(Ok((trial, dlam, dissipated)));
-                }
-            }
-            if rn < STALL_PROGRESS * best_rn {
-                best_rn = rn;
-                best_it = it;
-            } else if it - best_it >= STALL_ITERATIONS {
-                break;
-            }
-            prev_state = Some(trial.state.clone());
-            // safeguarded Newton: the tangent step, or the secant one where the tangent
-            // step does not lower the out-of-balance force (a piece whose contacts are
-            // all softening has a tangent near zero, and its step throws the piece far)
-            let lam = lam0 + dlam;
-            let mut pick = self.corrector(&trial, &r, rn, (p, base), &dq, lam, constraint, true)?;
-            let tangent_rn = pick.as_ref().map(|t| t.0 / scale);
-            let mut secant_rn = None;
-            if pick.as_ref().is_none_or(|t| t.0 > rn) {
-                if let Some(sec) =
-                    self.corrector(&trial, &r, rn, (p, base), &dq, lam, constraint, false)?
-                {
-                    secant_rn = Some(sec.0 / scale);
-                    // the secant step where it lowers the out-of-balance force; also where
-                    // the tangent step raises it over 100-fold (a stiff brick crack that
-                    // closes in it) and the secant one less
-                    let blown = pick
-                        .as_ref()
-                        .is_none_or(|t| t.0 > 100.0 * rn && sec.0 < t.0);
-                    if sec.0 < rn || blown {
-                        pick = Some(sec);
-                    }
-                }
-            }
-            if super::super::tracing() {
-                if let Some((_, next, dl_it, _)) = &pick {
-                    let (k, m) = next
-                        .iter()
-                        .zip(&dq)
-                        .map(|(a, b)| (a - b).abs())
-                        .enumerate()
-                        .fold((0, 0.0), |b, (i, v)| if v > b.1 { (i, v) } else { b });
-                    eprintln!("  step: tangent {tangent_rn:?} secant {secant_rn:?}, largest move {m:.3e} at unknown {k}, δλ {dl_it:.3e}");
-                }
-            }
-            let Some((_, next, dl_it, t)) = pick else {
-                return Ok(Err(StepFailure::NoConvergence(residual, best_true)));
-            };
-            dq = next;
-            dlam += dl_it;
-            carried = Some(t);
-            let dmax = dq.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if !dmax.is_finite() || dmax > 0.5 * size {
-                return Ok(Err(StepFailure::Divergence));
-            }
-        }
-        Ok(Err(StepFailure::NoConvergence(residual, best_true)))
+        let mut step = path_step::PathStep {
+            d: self,
+            base,
+            p,
+            lam0,
+            constraint,
+            dq,
+            dlam,
+            trial,
+            r: Vec::new(),
+            scale: 0.0,
+            residual: f64::INFINITY,
+            last_check: f64::INFINITY,
+            stuck: 0,
+            keep,
+            best_true: None,
+            dissipated: 0.0,
+            failure: None,
+            size,
+        };
+        let end = solver::iterate(&mut step, &controls)?;
+        Ok(step.finish(end))
     }
 }
 

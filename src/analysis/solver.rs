@@ -1,0 +1,308 @@
+//! The nonlinear solver under every analysis: the one iteration loop that static load
+//! increments, arc-length increments and time steps all go through (docs/theory.md,
+//! "Iterations").
+//!
+//! A [`Problem`] holds an iterate (the unknowns' increment and its [`super::config::Trial`]: contact
+//! states, forces and the out-of-balance force) and knows how to assess it and correct
+//! it; the loop of [`iterate`] owns what is the same for all of them:
+//!
+//! * the convergence test: the out-of-balance norm ‖r‖ ≤ tol · scale (N), with the
+//!   contacts that carry a force that matters (above tol · scale) in the same states as
+//!   at the last iteration, where the problem asks for that ([`Problem::accepts`]);
+//! * the stall window: an iteration that does not lower ‖r‖ below `stall_progress` times
+//!   its best value so far counts towards the window; when the window is full the problem
+//!   may escalate (the static secant iterations go on with tangent steps), then the bonds
+//!   that cycled between closed and open break ([`OpenFlips`], once per call), then the
+//!   iterations stop as stalled;
+//! * the contact-state bookkeeping between iterations (the last iteration's states and
+//!   forces, the closed ↔ open changes of bonded contacts).
+//!
+//! The correction itself (secant, tangent or blended matrix, its line search and
+//! safeguards) is the problem's [`Problem::correct`].
+
+use super::Stats;
+use crate::material::{ContactState, History};
+use crate::Result;
+
+/// A bonded contact that has changed between closed and open this many times in the
+/// iterations of one call of [`iterate`] breaks where they stall (closed → open → closed →
+/// open): docs/decisions, "Bonds that cannot hold".
+pub const BOND_BREAK_FLIPS: u32 = 3;
+
+/// The controls of one call of [`iterate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IterationControls {
+    /// Relative out-of-balance tolerance: converged when ‖r‖ ≤ tolerance × scale.
+    pub tolerance: f64,
+    /// Iterations before the call stops as exhausted.
+    pub max_iterations: usize,
+    /// An iteration counts as progress when it lowers ‖r‖ below this fraction of the
+    /// best value so far (the stall window's measure; [`Problem::stall_window`] its
+    /// length).
+    pub stall_progress: f64,
+}
+
+/// Where an iteration stands, as [`Problem::assess`] finds it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Assessment {
+    /// The out-of-balance norm ‖r‖ (N).
+    pub norm: f64,
+    /// The force that measures it (N): converged when `norm` ≤ tolerance × `scale`.
+    pub scale: f64,
+}
+
+/// The contacts' states and their forces (N; normal, shear) of a trial.
+#[derive(Debug, Clone, Copy)]
+pub struct Contacts<'p> {
+    pub state: &'p [ContactState],
+    pub force: &'p [[f64; 2]],
+}
+
+/// What a problem's step of the loop asks the loop to do next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flow {
+    Continue,
+    /// The problem has ended the call (a divergence, a failed factorization): the reason
+    /// is the problem's to keep.
+    Stop,
+}
+
+/// How a call of [`iterate`] ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ending {
+    /// Converged at this iteration (0-based), the problem's trial the solution.
+    Converged(usize),
+    /// The stall window ran out and neither an escalation nor broken bonds helped.
+    Stalled,
+    /// `max_iterations` iterations without convergence.
+    Exhausted,
+    /// The problem stopped the call ([`Flow::Stop`]).
+    Stopped,
+}
+
+/// The best out-of-balance norm of a call so far and the iteration that set it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stall {
+    progress: f64,
+    /// Best ‖r‖ (N).
+    pub best: f64,
+    /// The iteration that set `best`, or the last escalation or restart.
+    pub since: usize,
+}
+
+impl Stall {
+    fn new(progress: f64) -> Self {
+        Stall {
+            progress,
+            best: f64::INFINITY,
+            since: 0,
+        }
+    }
+
+    /// Record iteration `it`'s norm; whether the window of `window` iterations without
+    /// progress is full.
+    fn stalled(&mut self, it: usize, norm: f64, window: usize) -> bool {
+        if norm < self.progress * self.best {
+            self.best = norm;
+            self.since = it;
+            false
+        } else {
+            it - self.since >= window
+        }
+    }
+
+    /// Start the measure of progress again (the iterate's law changed: it is a new
+    /// problem from here).
+    pub fn forget_best(&mut self) {
+        self.best = f64::INFINITY;
+    }
+}
+
+/// A nonlinear problem that [`iterate`] solves: its iterate, and how to assess and
+/// correct it.
+pub trait Problem {
+    /// The counters the loop adds its iterations to.
+    fn stats(&mut self) -> &mut Stats;
+    /// The contacts of the current iterate's trial.
+    fn contacts(&self) -> Contacts<'_>;
+    /// The force scale (N) of the last assessment, or of the start before the first.
+    fn scale(&self) -> f64;
+    /// Whether a contact has a bond that can break ([`OpenFlips`] counts nothing
+    /// otherwise).
+    fn bonded(&self) -> bool {
+        false
+    }
+    /// The out-of-balance norm and its scale at iteration `it` (`prev`: the last
+    /// iteration's contacts); the problem may change the trial first (contacts held or
+    /// frozen) and restart the measure of progress (`stall`). `None` stops the call.
+    fn assess(
+        &mut self,
+        it: usize,
+        prev: Contacts<'_>,
+        stall: &mut Stall,
+    ) -> Result<Option<Assessment>>;
+    /// Whether the iterate, whose norm is within the tolerance, is the solution:
+    /// `changed` says whether a contact that carries a force that matters changed state
+    /// since the last iteration.
+    fn accepts(&mut self, it: usize, changed: bool) -> bool;
+    /// Iterations without progress before the call stalls.
+    fn stall_window(&self) -> usize;
+    /// At a full stall window: go on with a stronger correction (the window then starts
+    /// again). Whether it did.
+    fn escalate(&mut self, _it: usize, _stall: &Stall, _a: &Assessment) -> bool {
+        false
+    }
+    /// At a full stall window: break the bonds that `flips` counted cycling; whether any
+    /// broke. The trial is then evaluated again ([`Problem::restart`]).
+    fn break_bonds(&mut self, _flips: &OpenFlips) -> bool {
+        false
+    }
+    /// Evaluate the trial of the current iterate again (after bonds broke).
+    fn restart(&mut self) {}
+    /// The call stalls at iteration `it` (for traces and counters).
+    fn stalled(&mut self, _it: usize, _stall: &Stall, _a: &Assessment) {}
+    /// Correct the iterate at iteration `it` (its assessment `a`, `changed` as for
+    /// [`Problem::accepts`]).
+    fn correct(&mut self, it: usize, a: &Assessment, changed: bool) -> Result<Flow>;
+}
+
+/// Iterate `problem` to convergence under `controls`.
+pub fn iterate(problem: &mut impl Problem, controls: &IterationControls) -> Result<Ending> {
+    let mut prev_state = problem.contacts().state.to_vec();
+    let mut prev_force = problem.contacts().force.to_vec();
+    let mut open_flips = OpenFlips::new(problem.bonded(), prev_state.len());
+    let mut bonds_broken = false;
+    let mut stall = Stall::new(controls.stall_progress);
+    for it in 0..controls.max_iterations {
+        problem.stats().iterations += 1;
+        let prev = Contacts {
+            state: &prev_state,
+            force: &prev_force,
+        };
+        let negligible = controls.tolerance * problem.scale();
+        open_flips.count(it, problem.contacts(), prev, negligible);
+        let Some(a) = problem.assess(it, prev, &mut stall)? else {
+            return Ok(Ending::Stopped);
+        };
+        // a state change counts only where the contact carries a force that matters at
+        // the tolerance: contacts with no force (head joints under gravity) flip with
+        // round-off
+        let negligible = controls.tolerance * a.scale;
+        let changed = changed_states(problem.contacts(), prev, negligible);
+        if a.norm <= negligible && problem.accepts(it, changed) {
+            return Ok(Ending::Converged(it));
+        }
+        if stall.stalled(it, a.norm, problem.stall_window()) {
+            if problem.escalate(it, &stall, &a) {
+                stall.since = it;
+            } else if !bonds_broken && problem.break_bonds(&open_flips) {
+                // the iterations cycled on bonds that cannot hold: go on with them broken
+                // (once a call: where they still stall the load is beyond what the
+                // contacts can hold)
+                bonds_broken = true;
+                problem.restart();
+                stall = Stall {
+                    since: it,
+                    ..Stall::new(controls.stall_progress)
+                };
+                prev_state.clear();
+                prev_state.extend_from_slice(problem.contacts().state);
+                prev_force.clear();
+                prev_force.extend_from_slice(problem.contacts().force);
+                continue;
+            } else {
+                problem.stalled(it, &stall, &a);
+                return Ok(Ending::Stalled);
+            }
+        }
+        prev_state.clear();
+        prev_state.extend_from_slice(problem.contacts().state);
+        prev_force.clear();
+        prev_force.extend_from_slice(problem.contacts().force);
+        if problem.correct(it, &a, changed)? == Flow::Stop {
+            return Ok(Ending::Stopped);
+        }
+    }
+    Ok(Ending::Exhausted)
+}
+
+/// Whether a contact that carries a force above `negligible` (N), `now` or at the last
+/// iteration (`prev`), is in another state than at the last iteration.
+pub fn changed_states(now: Contacts<'_>, prev: Contacts<'_>, negligible: f64) -> bool {
+    let matters = |f: [f64; 2]| f[0].hypot(f[1]) > negligible;
+    now.state
+        .iter()
+        .zip(prev.state)
+        .enumerate()
+        .any(|(k, (a, b))| a != b && (matters(now.force[k]) || matters(prev.force[k])))
+}
+
+/// Per contact, the changes between closed and open in the iterations of one call of
+/// [`iterate`], counted where the contact carries a force that matters on one side: what
+/// breaks the bonds that cannot hold ([`BOND_BREAK_FLIPS`]). Empty, counting nothing,
+/// where no joint has a bond to break.
+pub struct OpenFlips(Vec<u32>);
+
+impl OpenFlips {
+    pub fn new(bonded: bool, contacts: usize) -> Self {
+        OpenFlips(vec![0; if bonded { contacts } else { 0 }])
+    }
+
+    /// Count the changes from the last iteration's contacts `prev` to those of `now`,
+    /// where the contact carries a force above `negligible` (N) on one side; nothing at
+    /// the first iteration (`it` = 0).
+    pub fn count(&mut self, it: usize, now: Contacts<'_>, prev: Contacts<'_>, negligible: f64) {
+        if it == 0 {
+            return;
+        }
+        let matters = |f: [f64; 2]| f[0].hypot(f[1]) > negligible;
+        for (k, flips) in self.0.iter_mut().enumerate() {
+            let open = now.state[k] == ContactState::Open;
+            if open != (prev.state[k] == ContactState::Open)
+                && (matters(now.force[k]) || matters(prev.force[k]))
+            {
+                *flips += 1;
+            }
+        }
+    }
+
+    /// Break the bond of every contact that changed [`BOND_BREAK_FLIPS`] times, is not
+    /// `skip`ped and whose bond `broken_bond(k, history)` breaks: its `history` set to
+    /// broken, the history it had pushed onto `broken` (to give back if the iterations
+    /// still fail). Whether any broke.
+    pub fn break_bonds(
+        &self,
+        history: &mut [History],
+        broken_bond: impl Fn(usize, History) -> Option<History>,
+        skip: impl Fn(usize) -> bool,
+        broken: &mut Vec<(usize, History)>,
+    ) -> bool {
+        let mut broke = false;
+        for (k, &flips) in self.0.iter().enumerate() {
+            if flips < BOND_BREAK_FLIPS || k >= history.len() || skip(k) {
+                continue;
+            }
+            if let Some(b) = broken_bond(k, history[k]) {
+                if super::tracing() {
+                    eprintln!("  bond broken: contact {k} after {flips} changes");
+                }
+                broken.push((k, history[k]));
+                history[k] = b;
+                broke = true;
+            }
+        }
+        broke
+    }
+
+    /// Give the bonds broken by [`OpenFlips::break_bonds`] back to `history` (`broken`
+    /// emptied): the iterations they were broken in did not lead to a committed state.
+    pub fn give_back(history: &mut [History], broken: &mut Vec<(usize, History)>) {
+        for (k, h) in broken.drain(..) {
+            history[k] = h;
+        }
+    }
+}
+
+#[cfg(test)]
+#[path = "solver_tests.rs"]
+mod tests;

@@ -62,6 +62,41 @@ fn check_case(name: &str) {
     );
 }
 
+/// The `[analysis]` settings are checked when the scene is read: `dfem check` reports a bad
+/// one with its line, before any run.
+#[test]
+fn analysis_settings_are_checked_by_dfem_check() {
+    for name in [
+        "unknown_strategy",
+        "tolerance_out_of_range",
+        "push_unknown_block",
+        "arc_length_without_push",
+        "unknown_integrator",
+        "rayleigh_one_number",
+        "line_search_not_boolean",
+    ] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/bad_input")
+            .join(format!("{name}.toml"));
+        let out = Command::new(common::dfem_bin())
+            .arg("check")
+            .arg(&path)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let line = text
+            .lines()
+            .find_map(|l| l.strip_prefix("# line: "))
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{name}: {stderr}");
+        assert!(
+            stderr.contains(&format!("{}:{line}: [analysis] key", path.display())),
+            "{name}: {stderr}"
+        );
+    }
+}
+
 macro_rules! cases {
     ($($name:ident),* $(,)?) => {
         $(#[test] fn $name() { check_case(stringify!($name)); })*
@@ -91,6 +126,13 @@ fn every_file_has_a_test() {
 
 cases! {
     accept_residual_without_arc_length,
+    arc_length_without_push,
+    push_deformable_block,
+    push_unknown_block,
+    rayleigh_one_number,
+    tolerance_out_of_range,
+    unknown_integrator,
+    unknown_strategy,
     softening_without_fracture_energy,
     cap_without_softening,
     line_search_not_boolean,

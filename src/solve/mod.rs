@@ -96,6 +96,22 @@ pub fn backend_with(name: &str, opts: &BackendOptions) -> crate::Result<Box<dyn 
     })
 }
 
+/// The backend of the nonsymmetric tangent corrections (Newton steps, arc-length
+/// increments; the friction couples a slipping contact's shear to its normal force) in a
+/// run whose `--solver` is `main`: the LU of the same family, MUMPS' unsymmetric
+/// factorization for the MUMPS backends in a serial run, faer's sparse LU for every
+/// other (faer's, PCG, PETSc, whose default Krylov options are for symmetric matrices,
+/// and any backend under `mpirun`).
+pub fn tangent_backend(main: &str) -> crate::Result<Box<dyn LinearBackend>> {
+    let serial = dfem_ffi::process_rank().1 <= 1;
+    let name = if serial && main.starts_with("mumps") {
+        "mumps-lu"
+    } else {
+        "faer-lu"
+    };
+    backend(name)
+}
+
 /// The rigid-body modes of the blocks, as the near-null space of the stiffness matrix
 /// ([`LinearBackend::set_near_null_space`]): three vectors of length `mesh.n_dofs`, the
 /// translation in x, the translation in y and the in-plane rotation, each block moving

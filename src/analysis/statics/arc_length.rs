@@ -453,11 +453,8 @@ impl Driver<'_> {
                 .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
             self.kbuf_local = None;
             Self::pin_rows(&self.pins, &mut self.kbuf);
-            if self.lu.is_none() {
-                self.lu = Some(crate::solve::backend("faer-lu")?);
-            }
             let size = self.model_size();
-            let lu = self.lu.as_mut().expect("created above");
+            let lu = corrections::tangent_lu(&mut self.lu, self.backend.name())?;
             let ok = lu.factorize(&self.kbuf).is_ok()
                 && lu.solve(&mut x1).is_ok()
                 && lu.solve(&mut x2).is_ok()

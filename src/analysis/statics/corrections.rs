@@ -65,6 +65,18 @@ pub(super) const LOW_RANK_CAP: usize = 256;
 /// out-of-balance tolerances (≥ 1e-8), so the iterations see no difference.
 pub(super) const REUSE_TOLERANCE: f64 = 1e-10;
 
+/// The backend of the tangent (nonsymmetric) matrices in `lu`, created at its first use
+/// for the run's backend `main` ([`crate::solve::tangent_backend`]).
+pub(super) fn tangent_lu<'b>(
+    lu: &'b mut Option<Box<dyn LinearBackend>>,
+    main: &str,
+) -> Result<&'b mut dyn LinearBackend> {
+    if lu.is_none() {
+        *lu = Some(crate::solve::tangent_backend(main)?);
+    }
+    Ok(lu.as_mut().expect("created above").as_mut())
+}
+
 impl Driver<'_> {
     /// Take the pinned unknowns out of `k`: their rows and columns are zeroed but for the
     /// diagonal (kept, or the mean diagonal where it is not positive), so that a solve
@@ -180,10 +192,7 @@ impl Driver<'_> {
                     self.hold_secant(states);
                 }
                 let backend: &mut dyn LinearBackend = if newton {
-                    if self.lu.is_none() {
-                        self.lu = Some(crate::solve::backend("faer-lu")?);
-                    }
-                    self.lu.as_mut().unwrap().as_mut()
+                    tangent_lu(&mut self.lu, self.backend.name())?
                 } else {
                     &mut *self.backend
                 };

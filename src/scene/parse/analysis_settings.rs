@@ -39,8 +39,8 @@ impl AnalysisTable<'_> {
         } else {
             Err(self.err(
                 key,
-                format!("'{key}' must be a number from {lo} to {hi}"),
-                format!("for example {key} = {d}"),
+                format!("'{key}' must be a number from {} to {}", short(lo), short(hi)),
+                format!("for example {key} = {}", short(d)),
             ))
         }
     }
@@ -295,6 +295,15 @@ impl AnalysisTable<'_> {
             adaptive: self.optional_number("adaptive_tolerance", 1e-6, 1e-15, 1.0)?,
             absolute: frame == Frame::Absolute,
         })
+    }
+}
+
+/// A number as a scene would write it: 1e-14 rather than 0.00000000000001.
+fn short(x: f64) -> String {
+    if x != 0.0 && (x.abs() < 1e-3 || x.abs() >= 1e7) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
     }
 }
 

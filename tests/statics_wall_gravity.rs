@@ -7,7 +7,7 @@
 //! src/analysis/statics.rs); N = 30, 40 and 50 converged.
 //!
 //! The settlement of the top course's middle brick (its nodes' mean vertical motion) is
-//! compared with the stack-of-blocks closed form of BENCHMARKS.md V9 applied to one
+//! compared with the stack-of-blocks closed form of docs/validation.md V9 applied to one
 //! column of the wall: the bed joints j = 1 … N (the base's included) carry the courses
 //! above them, (N − j + 1) γ h_b per unit area, and shorten by that times h / Eₙ; the
 //! bricks shorten under σ_yy(z) = −γ (H − z). The wall is in plane stress: with its

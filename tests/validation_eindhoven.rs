@@ -1,4 +1,4 @@
-//! The Eindhoven shear walls (Raijmakers and Vermeltfoort 1992; BENCHMARKS.md V8) as the
+//! The Eindhoven shear walls (Raijmakers and Vermeltfoort 1992; docs/validation.md V8) as the
 //! built-in examples `eindhoven` (J4D/J5D, 0.30 N/mm²), `eindhoven-j6d` (1.21 N/mm²) and
 //! `eindhoven-j7d` (2.12 N/mm²): the micro-model of Lourenço and Rots (1997), expanded
 //! bricks split at mid-length by potential cracks, softening mortar joints with the
@@ -11,7 +11,7 @@
 //!   and bottom courses clamped in steel beams; pre-compressions 0.30, 1.21, 2.12 N/mm²;
 //!   bricks E = 16700 N/mm², ν = 0.15; joints kₙ = 82 N/mm³, kₛ = 36 N/mm³, fₜ = 0.25
 //!   N/mm², G_f^I = 0.018 N/mm, c = 0.35 N/mm², tan φ = 0.75, G_f^II = 0.125 N/mm,
-//!   fₘ = 10.5 N/mm², brick cracks fₜ = 2.0 N/mm²: BENCHMARKS.md V8 (which cites
+//!   fₘ = 10.5 N/mm², brick cracks fₜ = 2.0 N/mm²: docs/validation.md V8 (which cites
 //!   Lourenço and Rots 1997); not verified against the paper.
 //! * the model itself (tension cut-off, Coulomb friction and an elliptical cap; tensile
 //!   and cohesion softening, compressive hardening/softening, tension–shear coupling):
@@ -559,7 +559,7 @@ fn figure() {
 
 // The failure patterns at the end of each wall's run with the bricks at 0.026 m
 // (`pattern`): the experiments (Raijmakers and Vermeltfoort 1992, as described by
-// Lourenço 1996; BENCHMARKS.md V8) open horizontal cracks at the heels first (rocking),
+// Lourenço 1996; docs/validation.md V8) open horizontal cracks at the heels first (rocking),
 // then a diagonal stepped crack through joints and bricks, with the toes crushing, more so
 // at the higher pre-compressions. The open cracks are read at the end of the run; the
 // toes from the caps' history (κ₃, `Outcome::contact_history`), since J4D and J6D

@@ -17,7 +17,7 @@
 //! computed by `crate::partial` (private) on faer's symbolic structure, as the subdomains of
 //! [`crate::substructure`]), and S is factorized by [`FaerCholesky`] (AMD), sparse.
 //!
-//! **What it saves.** In a nonlinear iteration of METHOD.md §4 only contacts change state,
+//! **What it saves.** In a nonlinear iteration of docs/theory.md §4 only contacts change state,
 //! and a contact's stiffness enters K_RR alone: every block whose interior rows (K_{I_b I_b},
 //! K_{I_b R}) hold the same values, bit for bit, keeps its factor and its clique, and the
 //! refactorization is that of S — a matrix on the boundary unknowns only. A change of a few

@@ -1,4 +1,4 @@
-//! Implicit dynamic analysis (METHOD.md §6): M ü + C u̇ + F_int(u) = F(t), seed Eq. 12,
+//! Implicit dynamic analysis (docs/theory.md §5): M ü + C u̇ + F_int(u) = F(t), seed Eq. 12,
 //! in the frame of the ground, F = gravity + `[[load]]` forces − M ι a_g(t); or, with
 //! `frame = "absolute"`, in a fixed frame with F = gravity + loads and the fixed blocks
 //! (the foundation) moved by the ground's displacement, integrated from a_g(t) with the
@@ -18,7 +18,7 @@
 //! with Newmark's a₁ = (Δu − h v₀ − h²(½ − β) a₀)/(β h²), v₁ = v₀ + h((1−γ) a₀ + γ a₁).
 //! The unknown of a step is its increment Δu, evaluated by the same co-rotational CST
 //! and contact return map as the static driver ([`Inputs::evaluate`]); the contact states are
-//! iterated within the step with the secant stiffness (METHOD.md §4), the effective
+//! iterated within the step with the secant stiffness (docs/theory.md §4), the effective
 //! matrix being (1−α_m)/(βh²) M + (1−α_f) γ/(βh) C + (1−α_f) K_s — positive definite
 //! even when blocks separate, thanks to the mass. The geometry is updated after every
 //! converged step (updated Lagrangian); a step that does not converge is halved.
@@ -509,7 +509,7 @@ fn invert3(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
 }
 
 /// Per contact: area A_c = length × thickness (m²), springs (kₙ, kₛ) (N/m) and
-/// viscosities (cₙ, cₛ) = (Eₙ*, Gₛ*) A_c / h (N·s/m), METHOD.md §3.
+/// viscosities (cₙ, cₛ) = (Eₙ*, Gₛ*) A_c / h (N·s/m), docs/theory.md §3.
 fn contact_coefficients(
     scene: &Scene,
     law: &MohrCoulomb,
@@ -1128,7 +1128,7 @@ impl<'a> Dynamics<'a> {
         }
     }
 
-    /// The out-of-balance force of a trial increment `dq` of a step (METHOD.md §6, the
+    /// The out-of-balance force of a trial increment `dq` of a step (docs/theory.md §5, the
     /// generalized-α balance): r = F_ext − M a_{1−α_m} − (1−α_f)(C v₁ + F_int(q₁)) −
     /// α_f (C v₀ + F_int(q₀)) (N), with the Newmark kinematics of `k` for a₁ and v₁; the
     /// viscous forces C v₁ of the trial states (the dashpots of closed contacts, the

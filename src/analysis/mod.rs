@@ -166,7 +166,7 @@ pub struct Outcome {
     pub fallen: Vec<usize>,
 }
 
-/// Pivot ratio below which the factorization is taken as singular: a mechanism (METHOD.md
+/// Pivot ratio below which the factorization is taken as singular: a mechanism (docs/theory.md
 /// §4, "the global stiffness matrix becomes ill-conditioned"). Round-off on a singular
 /// matrix leaves ratios near 1e-16 times the condition of the rest; stiff joints on soft
 /// blocks stay far above 1e-12.

@@ -1,4 +1,4 @@
-//! Nonlinear static and capacity analysis (METHOD.md §4, seed §4): loads in increments of
+//! Nonlinear static and capacity analysis (docs/theory.md §4, seed §4): loads in increments of
 //! a load factor; in each increment, iterations in which the contacts' excess forces are
 //! re-applied (the residual λF − F_int) until the out-of-balance force is below a relative
 //! tolerance and no contact changes state; the geometry is updated after each converged
@@ -893,7 +893,7 @@ impl<'a> Driver<'a> {
     ///
     /// The matrix is assembled on the geometry of the last converged increment, not the
     /// trial's: the out-of-balance force, which decides convergence, is always that of the
-    /// trial geometry (the updated Lagrangian scheme of METHOD.md §4), so the converged
+    /// trial geometry (the updated Lagrangian scheme of docs/theory.md §4), so the converged
     /// state is the same, while the iteration matrix stays fixed within an increment but
     /// for the contacts that change state. An iteration in which no contact changed then
     /// finds the matrix bit-identical and skips the factorization (only a solve), and one

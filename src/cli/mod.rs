@@ -1,4 +1,4 @@
-//! The command line (INTERFACE.md, "Command line"). Depends on everything; nothing depends
+//! The command line (docs/outputs.md, "Command line and exit status"). Depends on everything; nothing depends
 //! on it.
 
 mod progress;

@@ -27,7 +27,7 @@
 //! Σ_contacts A (G Δξ + σ̄(κ₃) Δκ₃) = Δτ                           (theory.md, Eq. A2)
 //! ```
 //!
-//! (J; [`crate::material::Softening::softening_work`], METHOD.md §3 for the law), a local
+//! (J; [`crate::material::Softening::softening_work`], docs/theory.md §3 for the law), a local
 //! constraint: only the contacts where a crack grows or a toe crushes take part, where the
 //! cylinder measures all unknowns and lets a local snap-back or an elastic mode pass.
 //! An increment whose dissipation constraint cannot be met falls back to displacement
@@ -1284,7 +1284,7 @@ mod tests {
     }
 
     /// The law's tangent on each side of the Coulomb kink and in tension, against the
-    /// closed forms of METHOD.md §3: stick diag(kₙ, kₛ); slip Fₛ = −sgn(Fₛ) tan φ Fₙ,
+    /// closed forms of docs/theory.md §3: stick diag(kₙ, kₛ); slip Fₛ = −sgn(Fₛ) tan φ Fₙ,
     /// so ∂Fₛ/∂δₙ = −sgn(Fₛ) tan φ kₙ and ∂Fₛ/∂δₛ = 0; open nothing.
     #[test]
     fn law_tangent_matches_the_closed_forms_on_each_side_of_the_kink() {

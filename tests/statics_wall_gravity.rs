@@ -1,6 +1,6 @@
 //! The deformable running-bond wall under its own weight in one increment (issue 4, the
-//! stall of the static iterations; docs/performance.md, "Growth with the size of the
-//! model"): the built-in `wall` example with N courses of N bricks, `lateral = 0`,
+//! stall of the static iterations; docs/decisions/
+//! 0007-free-motion-constants.md): the built-in `wall` example with N courses of N bricks, `lateral = 0`,
 //! `load_steps = 1`, `tolerance = 1e-8`. At N = 60 the iterations used to stall at an
 //! out-of-balance force of 3.5·10⁻⁵ of the load (bricks near the top held only by
 //! slipping bed joints and open head joints, `Driver::free_motion` in

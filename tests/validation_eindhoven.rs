@@ -566,8 +566,8 @@ fn figure() {
 // unload down their softening branches (from 52.4 to 38.5 kN, from 84.0 to 49.3 kN) and
 // the compressed zone at each toe shrinks: at 4 mm their end stresses are 0.78–0.90 fₘ
 // with 9–12 contacts on the yield surface, where 21 at each toe yielded on the way.
-// Measured on 66fab1d + the history (docs/performance.md, "The toes from the caps'
-// history"): J4D at 4 mm (the end of the push) x–y correlation of the open contacts
+// Measured on 66fab1d + the history (docs/performance.md, "Eindhoven
+// walls"): J4D at 4 mm (the end of the push) x–y correlation of the open contacts
 // −0.51, 30 brick cracks open, 21 and 21 toe contacts whose cap yielded, both toes past
 // fₘ (κ₃ ≥ κₚ: crushed), heels 2 % and 2 % open; J6D at 4 mm −0.83, 41, 21 and 21, both
 // past fₘ, 1 % and 2 %; J7D at 2.07 mm (its end, in its snap-back) −0.92, 14, 20 and
@@ -705,8 +705,8 @@ fn eindhoven_j7d_sweep() {
 /// The contact-state corrector (docs/theory.md, Eq. F1–F2) carries J7D, as shipped,
 /// through the state where it stopped without it: before the corrector the run stopped at
 /// 2.088 mm, 117.9 kN, 0.3 % below its first peak of 118.3 kN, its iterations cycling
-/// between the states of 4–8 contacts at the kinks of their laws (docs/performance.md,
-/// "Constraint switching and the reload past the snap-back"). With it the path goes on
+/// between the states of 4–8 contacts at the kinks of their laws (docs/decisions/
+/// 0026-eindhoven-mesh-and-path.md). With it the path goes on
 /// past that point and down the wall's softening branch: the load must fall by more
 /// than 3 % below the first peak (ten times the old 0.3 %) before the run ends.
 ///

@@ -98,7 +98,7 @@ struct Plan {
 /// work on — at most this share of the whole matrix's. The interiors' factorizations
 /// come on top only where a block's geometry changed (once an increment). On a 2D wall
 /// of bricks with contacts all round, the cliques of the bricks' boundaries make S cost
-/// more than the whole matrix (docs/performance.md, "Static condensation"), and the
+/// more than the whole matrix (docs/performance.md, "Static condensation of the blocks' interiors"), and the
 /// backend factorizes the whole matrix instead.
 pub const CONDENSE_MAX_SHARE: f64 = 0.5;
 
@@ -176,8 +176,7 @@ impl FaerCholeskyCondensed {
             // the AMD-ordered pattern leaves to the simplicial factorization; the
             // supernodal one factorizes those cliques with dense kernels: 16–20 % less
             // CPU time on the rocking column, whose time steps refactorize S at every
-            // iteration (docs/performance.md, "The blocks' interiors on the step's start
-            // geometry")
+            // iteration (docs/decisions/0021-start-geometry-interiors.md)
             root: FaerCholesky::new().with_supernodal_threshold(0.0),
             last: Vec::new(),
             factored: false,

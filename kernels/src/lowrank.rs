@@ -1594,7 +1594,7 @@ mod tests {
     /// a 120 × 100 grid (24,000 unknowns, x and y uncoupled: two 12,000-unknown problems;
     /// factor about the size of the deformable 40 × 40 wall P2's): faer's
     /// sequential kernels against the [`Split`] in pools of 1 and 2 threads, 400 rounds
-    /// taken in turn, minimum and median printed (docs/performance.md, P2 section). Not a
+    /// taken in turn, minimum and median printed (docs/performance.md, "P2: the 40 × 40 wall against OpenSees"). Not a
     /// check of speed (that depends on the machine's load); the bits are checked.
     /// `cargo test --release -p dfem-kernels --lib split_substitution_timing -- --ignored --nocapture`
     #[test]

@@ -136,7 +136,7 @@ pub fn moved(cur: &Mesh, dq: &[f64], presc: &[Point]) -> (Mesh, Vec<Point>) {
 /// (the same nodes, triangles, blocks and contacts, in other positions: a configuration
 /// moved from `cur` or from one it was moved from, as every trial of a static run is),
 /// whose memory it reuses instead of a copy of `cur` (about 1.5 MB on the 40 × 40 wall of
-/// docs/performance.md, at every trial). Only what moves is written: every node's
+/// docs/decisions/0017-trial-evaluation-overhead.md, at every trial). Only what moves is written: every node's
 /// position, every block's unknowns and centroid, every contact's normal; the result is
 /// [`moved`]'s to the bit. A spare whose sizes are not `cur`'s is dropped for a copy.
 pub fn moved_reusing(

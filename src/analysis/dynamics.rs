@@ -92,22 +92,15 @@ const TANGENT_MAX_ITERATIONS: usize = 30;
 /// A step's iterations switch to tangent steps (once the contact states settle) only
 /// where the secant iteration contracts the out-of-balance norm by less than this
 /// factor an iteration, and then keep to them until a state changes. Always switching
-/// (factor 0) converged the rocking drums of docs/performance.md in 10,742 iterations
-/// instead of 11,202, but in the collapse of the seed's arch under Acc. No. 2
-/// (examples/seed_arch/acc2_inertia.toml) it led the blocks through contact sequences
-/// that needed 727,493 iterations instead of the secant driver's 24,365 (31,169 with
-/// this rule; over the two records at dt = 0.009, 0.01, 0.011 and 0.0125 s, 173,513
-/// iterations with it against the secant driver's 526,101).
+/// (factor 0) led the seed arch's collapse through contact sequences that cost 30 times
+/// the iterations (docs/decisions/0019-dynamic-tangent-steps.md).
 const TANGENT_SLOW: f64 = 0.5;
 /// Iterations of a try of a step (not of the smallest length) without progress after
 /// which it is given up and the step cut, as it would be after `max_iterations`:
 /// progress is an out-of-balance norm below [`STALL_PROGRESS`] of the try's best so
-/// far. In the traces of the seed arch's collapse under Acc. No. 1 and No. 2 at
-/// Δt = 0.009, 0.01, 0.011 and 0.0125 s (docs/performance.md, "Giving up a stalled
-/// step"), 11,407 of the 12,029 tries that converged did so within 10 iterations and 10
-/// went 20 iterations without halving their best norm, while 1,051 tries ran to the 100
-/// iterations and failed, cycling for most of them (periods of 2–6 iterations among the
-/// states of a few contacts at their kinks): 44 % of all the iterations.
+/// far. Tries that converge nearly all do so within 10 iterations; those that cycle
+/// among the states of a few contacts at their kinks held 44 % of the iterations
+/// (docs/decisions/0020-dynamic-stall-rule.md).
 const STALL_ITERATIONS: usize = 20;
 /// See [`STALL_ITERATIONS`].
 const STALL_PROGRESS: f64 = 0.5;
@@ -116,7 +109,7 @@ const STALL_PROGRESS: f64 = 0.5;
 /// the rocking drums of the `column` example turn by at most 4·10⁻⁴ rad in a step of
 /// 5 ms, the voussoirs of the seed's arch by up to 10⁻² rad a step as they fall, where a
 /// matrix on the start geometry slowed the iterations (tries of 12 iterations and more:
-/// 870 against 56 under Acc. No. 1).
+/// 870 against 56 under Acc. No. 1; docs/decisions/0021-start-geometry-interiors.md).
 const START_GEOMETRY_TURN: f64 = 1e-3;
 /// Factor on that spring per iteration the contact stays open.
 const OPEN_WEIGHT_DECAY: f64 = 0.1;
@@ -139,15 +132,10 @@ const FREEZE_FLIPS: u32 = 6;
 /// The largest force (fraction of the step's force scale, `Balance::scale`) a contact
 /// may have carried closed within a try for [`FREEZE_FLIPS`] to hold it open at a step
 /// length above the smallest. Held open only at the smallest length, such contacts
-/// (0.1–1 N on voussoirs of tens of kN in the seed arch's collapse) stalled try after
-/// try, each halving the step down to it and the step doubling back after: on the
-/// arch's eight runs under Acc. No. 1 and No. 2 (docs/performance.md, "The release redo
-/// from the first try, and chattering contacts held open") up to 1,402 tries given up in
-/// one run, and with the redo from the first try 19,538 in one at `tolerance` 1.25·10⁻⁶
-/// (72 s instead of 1). Held open at any length
-/// whatever their force, a box landing on its base was launched (the held contact's
-/// penetration, up to a tenth of the band, returned as elastic energy): a contact that
-/// carries a force that matters is never held open above the smallest length.
+/// stalled try after try; held open at any length whatever their force, a box landing on
+/// its base was launched (the held contact's penetration returned as elastic energy): a
+/// contact that carries a force that matters is never held open above the smallest
+/// length (docs/decisions/0022-release-redo-and-held-open-contacts.md).
 const HOLD_OPEN_FORCE: f64 = 1e-3;
 /// The least force (fraction of the step's force scale at its start, as
 /// [`HOLD_OPEN_FORCE`]) a contact closed at a step's start must carry there for its
@@ -156,10 +144,7 @@ const HOLD_OPEN_FORCE: f64 = 1e-3;
 /// of a running-bond wall under gravity) sits at the kink of its law: with its dashpots
 /// engaged while the trial is closed, the force jumps by cₙ δ̇ₙ and cₛ δ̇ₛ each time the
 /// iterations carry it across δₙ = 0, a law with no solution there that the iterations
-/// cycle around, whatever the step (with the joints' dashpots of
-/// docs/performance.md, "Dashpots of contacts that carry no force", a rigid 30 × 30 wall
-/// under El Centro took 5,692 iterations and 60 stalled tries for 1 s, against 816
-/// without dashpots). Such a contact damps nothing that matters; it takes its dashpots
+/// cycle around, whatever the step (docs/decisions/0023-dashpots-and-rayleigh.md). Such a contact damps nothing that matters; it takes its dashpots
 /// back at the first step it starts carrying a force.
 const DASHPOT_FORCE: f64 = 1e-3;
 /// Penetration (fraction of the band thickness) a contact held open may end a step with
@@ -1164,8 +1149,8 @@ impl<'a> Dynamics<'a> {
             // step's start (the committed stiffness, as OpenSees' `betaKcomm`), on the
             // trial's geometry: with the trial's states, a contact that changed between
             // stick and slip switched a₁ kₛ δ̇ₛ on and off, and the iterations cycled about
-            // it (a rigid wall under El Centro failed within 0.02 s: docs/performance.md,
-            // "Rayleigh damping on the step's start states"); none from a contact with no
+            // it (a rigid wall under El Centro failed within 0.02 s:
+            // docs/decisions/0023-dashpots-and-rayleigh.md); none from a contact with no
             // force at the start (`DASHPOT_FORCE`), nor across one open in the trial (no
             // damping force across an open band, as for the dashpots)
             let local: Vec<LocalStiffness> = (0..self.springs.len())
@@ -1474,7 +1459,7 @@ impl<'a> Dynamics<'a> {
             // slipping contacts' friction, which depends on their normal force: the secant
             // matrix leaves that out (and keeps kₛ on contacts that flipped between stick
             // and slip), so its iterations may contract slowly (0.79 an iteration on the
-            // rocking drums of docs/performance.md, "Tangent steps in the dynamic driver");
+            // rocking drums of docs/decisions/0019-dynamic-tangent-steps.md);
             // a tangent step closes them in one or two. Taken only where the secant
             // iteration is slow ([`TANGENT_SLOW`]), and then until a state changes.
             let tangent = it > 1
@@ -1681,7 +1666,7 @@ impl<'a> Dynamics<'a> {
     /// always the trial geometry's). The interior rows of a block on the start geometry
     /// then stay the same within a step, and the condensed backend does not refactorize
     /// its interior after the step's first iteration (on the rocking drums of
-    /// docs/performance.md, "The blocks' interiors on the step's start geometry", those
+    /// docs/decisions/0021-start-geometry-interiors.md, those
     /// refactorizations had taken a third of the run). The contacts stay in the trial's
     /// geometry: with them on the start's too, the seed arch's voussoirs, which turn by
     /// up to 10⁻² rad within a step of the collapse, took 2–11 times the iterations.
@@ -1990,8 +1975,8 @@ impl<'a> Dynamics<'a> {
                 }
                 // the redo starts from the first try's answer, which differs from the
                 // redo's by the released contacts' small share of the start: 2–3
-                // iterations instead of the 5–7 of a start from rest (docs/performance.md,
-                // "The release redo from the first try")
+                // iterations instead of the 5–7 of a start from rest (docs/decisions/
+                // 0022-release-redo-and-held-open-contacts.md)
                 let first = accepted.as_ref().map(|acc| acc.trial.dq.clone());
                 self.release(&released);
                 let before = self.stats.iterations;

@@ -205,7 +205,7 @@ pub fn run_with(
         // a free block that touches nothing at all is a modelling mistake (misplaced
         // coordinates, a tolerance too small), not a structure
         // one pass over the contacts (a search per block was quadratic: 6 s of a 10⁵-unknown
-        // wall's 8.6 s run, docs/performance.md "Start-up, and the 10⁶-unknown wall")
+        // wall's 8.6 s run, docs/performance.md, "Growth with the size of the model")
         let mut touched = vec![false; mesh.blocks.len()];
         for c in &mesh.contacts {
             touched[c.block_l as usize] = true;

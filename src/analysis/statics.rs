@@ -66,7 +66,7 @@ pub struct Settings {
     /// default off): the first corrections of an increment are then solved by conjugate
     /// gradients preconditioned with it, corrected for the contacts that changed state
     /// (`Driver::reuse`, docs/theory.md "Factorizations across increments"), instead of
-    /// a refactorization. Fewer factorizations, but on the walls of docs/performance.md no
+    /// a refactorization. Fewer factorizations, but (docs/decisions/0013-reuse-across-increments-off.md) no
     /// faster (P2) or never taken (10⁵ unknowns: hundreds of contacts change state
     /// between increments), hence off.
     pub reuse_across_increments: bool,
@@ -240,10 +240,8 @@ const MODE_RATIO: f64 = 100.0;
 /// The free motion is taken when the out-of-balance norm after it is below this many
 /// times the norm after the iteration's own step: the norm is not what the motion
 /// lowers (see [`Driver::free_motion`]), and the next iteration, with the contact that
-/// stuck now holding the group, removes what it leaves. On the 60 × 60 wall of
-/// docs/performance.md ("Growth") 3 converged in 58 iterations, 1 (only motions that
-/// lower the norm) in 99 (measured with the motion after every singular iteration,
-/// before [`MODE_STREAK`]).
+/// stuck now holding the group, removes what it leaves
+/// (docs/decisions/0007-free-motion-constants.md).
 const MODE_ACCEPT: f64 = 3.0;
 /// At most this many groups of free blocks move in one iteration (those with the largest
 /// out-of-balance force along their motion).
@@ -374,8 +372,8 @@ pub struct Driver<'a> {
 
 /// The most trial configurations [`Driver::recycle`] keeps: the line search evaluates
 /// one trial at a time and keeps the best, the iteration one, so that two spares serve
-/// nearly every trial; more would only hold memory (a mesh is 1.5 MB on the rigid P2 wall
-/// of docs/performance.md, 9,480 contacts, and grows with the contacts).
+/// nearly every trial; more would only hold memory
+/// (docs/decisions/0017-trial-evaluation-overhead.md).
 const SPARE_MESHES: usize = 2;
 
 /// A contact held in one state of its law for the rest of an arc-length increment: a
@@ -459,38 +457,29 @@ impl Load<'_> {
 }
 
 /// A secant correction reuses the held factorization as a preconditioner when at most this
-/// many contacts changed state since it was computed. Each changed contact is a rank-1 or
-/// rank-2 change of K, and conjugate gradients need about one iteration per unit of rank
-/// plus three for the change of geometry (measured on the 30×30 wall of
-/// docs/performance.md: 0 changes → 3 iterations, 5–9 → 6–10, 20–24 → 18–25), while one
-/// iteration (a solve pair and a product with K) costs a tenth to a twentieth of a numeric
-/// factorization on the walls of docs/performance.md. Since the low-rank path
-/// ([`Driver::changed`]) takes the changes on an unchanged geometry, this applies to the
-/// first correction of an increment (a new geometry: the held factorization is then a
-/// preconditioner only) and to changes the backend refused; on the P2 walls the other
-/// first corrections come after 8–2,500 changes (5 of the deformable wall's 35 take
-/// conjugate gradients, none of the rigid wall's), so the limit was left as it was.
+/// many contacts changed state since it was computed: conjugate gradients need about one
+/// iteration per unit of rank of the change plus three for a change of geometry, and an
+/// iteration costs a tenth to a twentieth of a numeric factorization. Since the low-rank
+/// path ([`Driver::changed`]) takes the changes on an unchanged geometry, this applies to
+/// the first correction of an increment and to changes the backend refused
+/// (docs/decisions/0012-low-rank-correction-limits.md).
 const REUSE_MAX_CHANGES: usize = 4;
 /// The iteration matrix is updated ([`System::stiffness_update`]) rather than assembled
 /// again when at most 1/`UPDATE_MAX_SHARE` of the contacts changed their local stiffness:
 /// the update finds the entries and elements a changed contact touches one by one, which
-/// on the rigid P2 wall of docs/performance.md costs more than assembling all contacts
-/// once 1/8 of them changed (a tangent step after a secant one changes every slipping
-/// contact's).
+/// costs more than assembling all contacts once many changed (a tangent step after a
+/// secant one changes every slipping contact's; docs/decisions/0010-gmres-tangent-steps.md).
 const UPDATE_MAX_SHARE: usize = 32;
 /// GMRES iterations of a tangent correction preconditioned with the held secant
 /// factorization ([`Driver::tangent_with_secant_factor`]) after which the tangent matrix is
-/// factorized with LU instead: an LU factorization of the tangent costs about 4–5
-/// Cholesky factorizations of the secant matrix, or 40 preconditioned iterations, on the
-/// P2 wall of docs/performance.md.
+/// factorized with LU instead: an LU of the tangent costs about 40 preconditioned
+/// iterations (docs/decisions/0010-gmres-tangent-steps.md).
 const TANGENT_MAX_ITERATIONS: usize = 30;
 /// A tangent correction of the secant strategy that GMRES on the secant factorization did
 /// not solve is solved with an LU factorization of the tangent only when the held Cholesky
-/// factor has at most this many entries; above, the secant correction is taken instead.
-/// On the rigid 10⁶-unknown wall of docs/performance.md (Cholesky factor 1.66·10⁸
-/// entries, 1.3 GB) the LU raised the resident memory from 5.6 to 11.6 GB and failed; on
-/// the 10⁵-unknown wall (1.28·10⁷ entries) it fits in well under 1 GB. 5·10⁷ Cholesky
-/// entries (0.4 GB) lets an LU of up to about 4× that (2.4 GB with its indices) through.
+/// factor has at most this many entries; above, the secant correction is taken instead
+/// (an LU of the 10⁶-unknown wall's tangent ran out of memory;
+/// docs/decisions/0011-tangent-lu-size-limit.md).
 const TANGENT_LU_MAX_ENTRIES: usize = 50_000_000;
 /// The loosest relative residual of a tangent correction by GMRES.
 const TANGENT_TOLERANCE: f64 = 1e-3;
@@ -500,11 +489,7 @@ const REUSE_MAX_ITERATIONS: usize = 8;
 /// On the rigid P2 wall a secant correction is solved with the held factorization
 /// corrected for the change ([`Driver::changed`]) when at most this many contacts changed
 /// state since it was computed (each a change of rank ≤ 2); larger models allow more
-/// ([`Driver::low_rank_limit`]). Measured on the rigid P2 wall of docs/performance.md (each correction timed
-/// in the driver, one window): with 64 (and rank 128) the corrections change a median 22
-/// contacts and cost 0.45 of a refactorization; with 128 (and rank 256) the held factor
-/// is kept longer, the corrections change a median 55 contacts and cost 0.80 of one,
-/// for 39 factorizations instead of 47.
+/// ([`Driver::low_rank_limit`]; docs/decisions/0012-low-rank-correction-limits.md).
 const LOW_RANK_MAX_CHANGES: usize = 64;
 /// Unknowns of the rigid P2 wall, where [`LOW_RANK_MAX_CHANGES`] was measured. The
 /// break-even rank of the correction grows with the model ([`Driver::low_rank_limit`]).
@@ -519,16 +504,16 @@ const REUSE_TOLERANCE: f64 = 1e-10;
 
 /// An increment stops as not converged when its out-of-balance norm has not fallen below
 /// [`STALL_PROGRESS`] times its best value for this many iterations. Past the limit load
-/// the secant iterations stagnate at a fixed residual (a toppling block: 9 % of the load,
-/// for all 300 iterations), while converging increments near the limit, where contacts
-/// open and slip in waves, still gain 10 % within 60 iterations (the 30×30 wall of
-/// docs/performance.md: its slowest increment improves by that in at most 25).
+/// the secant iterations stagnate at a fixed residual, while converging increments near
+/// the limit still gain 10 % within at most 25 iterations
+/// (docs/decisions/0003-stall-window-and-tangent-fallback.md).
 const STALL_ITERATIONS: usize = 60;
 /// The stall windows of a capacity search's probes ([`Driver::stall_window`]): secant
 /// iterations, then tangent steps. Half the secant window still covers the slowest
 /// converging increment measured near the limit (10 % gained within 25 iterations, the
 /// 30×30 wall above); a probe that fails within them only narrows the bracket, and the
-/// failure that closes it is confirmed with the full windows.
+/// failure that closes it is confirmed with the full windows
+/// (docs/decisions/0004-capacity-probe-windows.md).
 const PROBE_STALL_ITERATIONS: usize = 30;
 const PROBE_TANGENT_STALL_ITERATIONS: usize = 10;
 /// A bonded contact that has changed between closed and open this many times in an
@@ -544,7 +529,7 @@ const SAFEGUARD_STEPS: usize = 12;
 /// Fallout ([`Driver::fall_out`]): a failure mode that moves at most this many blocks, or
 /// [`FALLOUT_MAX_SHARE`] of the free blocks if that is more, is a local failure (key
 /// blocks falling out of a tunnel's roof: 6, then 6 behind them, of the 1,348 blocks of
-/// the growth bench's excavation at s = 0.55 m, docs/performance.md); a larger one is the
+/// the growth bench's excavation at s = 0.55 m, docs/decisions/0032-fallout-constants.md); a larger one is the
 /// structure's.
 const FALLOUT_MAX_BLOCKS: usize = 8;
 /// See [`FALLOUT_MAX_BLOCKS`].
@@ -959,7 +944,7 @@ impl<'a> Driver<'a> {
     /// (`SolverStats::factor_nnz`; an LU of the same matrix holds L and U with pivoting's
     /// extra fill, several times as many) or, for a backend that does not report them
     /// (iterative ones), from the matrix's stored entries × 8 (the ratio of the
-    /// Cholesky factor's entries to the matrix's on the walls of docs/performance.md).
+    /// Cholesky factor's entries to the matrix's on the walls of docs/performance.md, "Memory").
     /// The size of the model alone decides, never the machine's free memory, so that the
     /// results do not depend on the machine.
     fn tangent_lu_too_large(&self) -> bool {
@@ -1099,8 +1084,8 @@ impl<'a> Driver<'a> {
         r: &[f64],
     ) -> Option<Vec<f64>> {
         if self.gmres_failed {
-            // it failed earlier in this increment: on the 10⁶-unknown wall of
-            // docs/performance.md it then failed at every later tangent step of the
+            // it failed earlier in this increment: on the 10⁶-unknown wall
+            // (docs/decisions/0011-tangent-lu-size-limit.md) it then failed at every later tangent step of the
             // increment (31 in a row, 30 iterations each)
             return None;
         }
@@ -1207,7 +1192,7 @@ impl<'a> Driver<'a> {
     /// root of the elimination tree, whose top separators (√n unknowns on a wall, dense)
     /// make a path cost ∝ n, while a nested-dissection factorization of a wall costs
     /// ∝ n^1.5: the break-even rank grows as √n. Measured (docs/performance.md, "The
-    /// low-rank correction in the static driver"): a correction at 0.45 of a
+    /// cost of a secant iteration"): a correction at 0.45 of a
     /// refactorization for a median 22 changed contacts on the rigid P2 wall (4,860
     /// unknowns), at 0.13–0.17 for 39 on the 10⁵-unknown wall. The size of the model alone
     /// decides (no timing), so that the results do not depend on the machine.
@@ -1496,8 +1481,8 @@ impl<'a> Driver<'a> {
             } else if it - best_it >= self.stall_window(tangent_only) {
                 if self.settings.strategy == Strategy::Secant && !tangent_only {
                     // the secant iterations stagnate, which on large walls they do below
-                    // the limit load, a little above the tolerance (docs/performance.md,
-                    // "60×60 and 100×100 walls"): go on with tangent steps, which take the
+                    // the limit load, a little above the tolerance (docs/decisions/
+                    // 0003-stall-window-and-tangent-fallback.md): go on with tangent steps, which take the
                     // friction's dependence on the normal force into account, before
                     // declaring the load beyond what the contacts can hold
                     tangent_only = true;
@@ -1539,7 +1524,7 @@ impl<'a> Driver<'a> {
             // with the states fixed the problem is linear but for the friction limit's
             // dependence on the normal force, which the secant matrix leaves out (the
             // secant iterations then contract by a constant factor, ~0.7 on the walls of
-            // docs/performance.md; the tangent step closes them in one or two)
+            // docs/decisions/0002-safeguarded-secant-steps.md; the tangent step closes them in one or two)
             let tangent = self.settings.strategy == Strategy::Newton
                 || tangent_only
                 || (self.settings.strategy == Strategy::Secant
@@ -1750,7 +1735,7 @@ impl<'a> Driver<'a> {
     /// shear that its equilibrium holds only with the contact in tension, past its
     /// strength, and open it carries nothing, and its equilibrium closes it again. No
     /// intact state is consistent, so the iterations cycle until the stall rule fails the
-    /// increment (a false collapse: the free-surface tunnel of docs/performance.md),
+    /// increment (a false collapse: the free-surface tunnel of docs/decisions/0009-breaking-cycling-bonds.md),
     /// where the brittle law says the bond has broken. Only where the increment would
     /// otherwise fail, so that a run whose increments converge is not changed. Returns
     /// whether a bond broke (the trial must then be evaluated again).

@@ -1,7 +1,7 @@
 //! Subdomain-parallel factorization (issue 11): `faer-substructured` against faer's
 //! single-thread Cholesky of the whole matrix (`faer-cholesky`, AMD) on the built-in
 //! running-bond wall (`dfem example wall`) scaled to n × n bricks, its elastic stiffness
-//! of the first solve (K of METHOD.md §2–3) and its gravity load.
+//! of the first solve (K of docs/theory.md §2–3) and its gravity load.
 //!
 //!     cargo bench --bench substructure -- [--n 300] [--kind deformable|rigid]
 //!         [--subdomains 1,2,4] [--threads 2] [--reps 3] [--ordering metis|amd]

@@ -7,8 +7,8 @@
 //! the fixed base (constrained slots).
 //!
 //! Reference: K = Σ_triangles t A Bᵀ D B, the dense triple product of B and the area of
-//! `cst_b` with the material's tD (METHOD.md §2), plus Σ_contacts Σ_ab g_a k_ab g_bᵀ with
-//! the gradients gₙ, gₛ of `contact_gradient` (METHOD.md §3), every product added into a
+//! `cst_b` with the material's tD (docs/theory.md §2), plus Σ_contacts Σ_ab g_a k_ab g_bᵀ with
+//! the gradients gₙ, gₛ of `contact_gradient` (docs/theory.md §3), every product added into a
 //! hash map keyed by (row, column) with the sum of absolute values. Each entry is a sum of
 //! at most ~100 rounded products, so the assembly may differ from it by at most
 //! 100 · 2⁻⁵³ · Σ|terms| ≈ 1.1e-14 Σ|terms|; the test allows 1e-12 Σ|terms|, still far

@@ -1,4 +1,4 @@
-//! The command line as INTERFACE.md describes it: run, check, example, export-matrix.
+//! The command line as docs/outputs.md, "Command line and exit status", describes it: run, check, example, export-matrix.
 
 mod common;
 use std::process::Command;

@@ -1,5 +1,5 @@
 //! The same scene gives bit-identical results with `--threads 1` and `--threads 2`, and
-//! across repeated runs (INTERFACE.md: "Results do not depend on it").
+//! across repeated runs (docs/outputs.md, "Command line and exit status": "Results do not depend on it").
 
 mod common;
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! The built-in tunnel in jointed rock (`dfem example tunnel`: a 20 m × 20 m rock mass
 //! cut by two joint sets, a circular opening of radius 3 m, a fixed frame) under its own
-//! weight, with gravity in 10 and in 50 increments (docs/performance.md, "The slope line
-//! search: the tunnel under gravity").
+//! weight, with gravity in 10 and in 50 increments (docs/decisions/
+//! 0008-slope-line-search.md).
 //!
 //! Under gravity the elastic predictor of the first increment puts the rock above
 //! mid-height in tension (it hangs from the top frame), so 273 of the 552 contacts open at

@@ -1,13 +1,13 @@
 //! The deformable running-bond wall under its own weight in one increment (issue 4, the
-//! stall of the static iterations; docs/performance.md, "Growth with the size of the
-//! model"): the built-in `wall` example with N courses of N bricks, `lateral = 0`,
+//! stall of the static iterations; docs/decisions/
+//! 0007-free-motion-constants.md): the built-in `wall` example with N courses of N bricks, `lateral = 0`,
 //! `load_steps = 1`, `tolerance = 1e-8`. At N = 60 the iterations used to stall at an
 //! out-of-balance force of 3.5·10⁻⁵ of the load (bricks near the top held only by
 //! slipping bed joints and open head joints, `Driver::free_motion` in
 //! src/analysis/statics.rs); N = 30, 40 and 50 converged.
 //!
 //! The settlement of the top course's middle brick (its nodes' mean vertical motion) is
-//! compared with the stack-of-blocks closed form of BENCHMARKS.md V9 applied to one
+//! compared with the stack-of-blocks closed form of docs/validation.md V9 applied to one
 //! column of the wall: the bed joints j = 1 … N (the base's included) carry the courses
 //! above them, (N − j + 1) γ h_b per unit area, and shorten by that times h / Eₙ; the
 //! bricks shorten under σ_yy(z) = −γ (H − z). The wall is in plane stress: with its

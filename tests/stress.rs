@@ -267,7 +267,7 @@ fn joint_to_block_stiffness_every_decade() {
 }
 
 // ---------------------------------------------------------------------------------------
-// Time steps over three decades (implicit dynamics, METHOD.md §6)
+// Time steps over three decades (implicit dynamics, docs/theory.md §5)
 
 use dfem::analysis::dynamics::History;
 
@@ -373,7 +373,7 @@ fn incline_run(alpha: f64, phi: f64, kind: &str, integrator: &str, dt: f64) -> R
 }
 
 /// Case 1: a block released on an incline α = 30° > φ = 20° slides
-/// s(t) = ½ g (sin α − cos α tan φ) t² (METHOD.md §6); at t = 1 s, s = 0.906 m.
+/// s(t) = ½ g (sin α − cos α tan φ) t² (docs/theory.md §5); at t = 1 s, s = 0.906 m.
 fn sliding_case(kind: &str, integrator: &str, dt: f64) {
     let (alpha, phi) = (30f64.to_radians(), 20f64.to_radians());
     let r = incline_run(30.0, 20.0, kind, integrator, dt);

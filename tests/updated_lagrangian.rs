@@ -1,4 +1,4 @@
-//! Updated Lagrangian geometry with co-rotational CSTs (METHOD.md §4: "rotate, don't
+//! Updated Lagrangian geometry with co-rotational CSTs (docs/theory.md §4: "rotate, don't
 //! stretch"): a rigid rotation of a deformable block, however large, produces no strain,
 //! and a block carrying a stress that is rotated rigidly carries the same stress rotated
 //! (σ' = R σ Rᵀ). And a prescribed displacement of a fixed block is followed by the block

@@ -1,4 +1,4 @@
-//! Semicircular voussoir arch on fixed springings (BENCHMARKS.md V6; Milankovitch 1907,
+//! Semicircular voussoir arch on fixed springings (docs/validation.md V6; Milankovitch 1907,
 //! Heyman; Makris and Alexakis 2013). Rigid voussoirs, radial joints, high friction.
 //!
 //! The reference is a rigid-block limit analysis (static theorem as a linear program over

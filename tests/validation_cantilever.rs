@@ -1,4 +1,4 @@
-//! Cantilever of ten blocks with very stiff, glued joints under a tip load (BENCHMARKS.md V9).
+//! Cantilever of ten blocks with very stiff, glued joints under a tip load (docs/validation.md V9).
 //!
 //!   fixed |b1|b2|b3|b4|b5|b6|b7|b8|b9|b10|  ↓ P (spread over the tip edge)
 //!   L = 10 m, H = 1 m, t = 1 m, E = 10 GPa, ν = 0.25, plane stress

@@ -1,7 +1,7 @@
-//! Implicit dynamics (METHOD.md §6) against closed forms and an independent integration.
+//! Implicit dynamics (docs/theory.md §5) against closed forms and an independent integration.
 //!
 //! * A rigid block released on an incline α > φ slides s(t) = ½ g (sin α − cos α tan φ) t²
-//!   (METHOD.md §6); with α < φ it stays.
+//!   (docs/theory.md §5); with α < φ it stays.
 //! * A rigid block on a flat base under El Centro 1940 N-S, tan φ = 0.2: the largest
 //!   sliding displacement against a rigid-plastic sliding-block integration written
 //!   here (two-way sliding, Newmark 1965's model, time step 10⁻⁴ s).
@@ -278,8 +278,8 @@ ground_motion = {{ file = "{file}", scale = 2.0, direction = "y" }}
 /// The seed's dynamic incline examples (section 4.2, Fig. 4): on a 30° incline a 4 m × 4 m
 /// block with φ = 25° slides (Δt = 0.04 s) and a block 4 m along the slope and 12 m high
 /// with φ = 35° topples (Δt = 0.01 s), as the kinematic conditions of Hoek and Bray say
-/// (METHOD.md §5). Seed Table 1 is not legible in the source; the Hoek–Bray properties of
-/// METHOD.md §5 are used. Deformable CST blocks, as in the seed.
+/// (docs/validation.md). Seed Table 1 is not legible in the source; the Hoek–Bray properties of
+/// docs/validation.md are used. Deformable CST blocks, as in the seed.
 #[test]
 fn seed_incline_examples_slide_and_topple() {
     let scene = |b: f64, d: f64, phi: f64, dt: f64, duration: f64| {
@@ -413,7 +413,7 @@ ground_motion = {{ expression = "0.5*step(0.25-t)", units = "g" }}
     assert!((ratio / housner - 1.0).abs() < 0.05, "{ratio} vs {housner}");
 }
 
-/// `dfem run` on the built-in dynamic example: history.csv (INTERFACE.md header), frames
+/// `dfem run` on the built-in dynamic example: history.csv (header: docs/scene-reference.md, "Dynamic results"), frames
 /// every `[output] every` steps in results.pvd, summary status "completed", and the same
 /// bytes whatever the number of threads.
 #[test]
@@ -466,7 +466,7 @@ fn cli_dynamic_run_writes_history_and_frames() {
 }
 
 /// A rigid 1 m box released 0.2 m above a fixed base: no contact exists at the start (the
-/// mesh has none); the search for new contacts (METHOD.md §6) finds the base under the
+/// mesh has none); the search for new contacts (docs/theory.md §5) finds the base under the
 /// falling corners. The box falls freely (−½ g t²), lands at √(2h/g) within one step,
 /// never passes into the base, and comes to rest on its two corner contacts at the
 /// static settlement W / (2 kₙ), kₙ = Eₙ (b/2) t / h_band. Generalized-α with ρ∞ = 0

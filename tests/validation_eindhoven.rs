@@ -1,4 +1,4 @@
-//! The Eindhoven shear walls (Raijmakers and Vermeltfoort 1992; BENCHMARKS.md V8) as the
+//! The Eindhoven shear walls (Raijmakers and Vermeltfoort 1992; docs/validation.md V8) as the
 //! built-in examples `eindhoven` (J4D/J5D, 0.30 N/mm²), `eindhoven-j6d` (1.21 N/mm²) and
 //! `eindhoven-j7d` (2.12 N/mm²): the micro-model of Lourenço and Rots (1997), expanded
 //! bricks split at mid-length by potential cracks, softening mortar joints with the
@@ -11,7 +11,7 @@
 //!   and bottom courses clamped in steel beams; pre-compressions 0.30, 1.21, 2.12 N/mm²;
 //!   bricks E = 16700 N/mm², ν = 0.15; joints kₙ = 82 N/mm³, kₛ = 36 N/mm³, fₜ = 0.25
 //!   N/mm², G_f^I = 0.018 N/mm, c = 0.35 N/mm², tan φ = 0.75, G_f^II = 0.125 N/mm,
-//!   fₘ = 10.5 N/mm², brick cracks fₜ = 2.0 N/mm²: BENCHMARKS.md V8 (which cites
+//!   fₘ = 10.5 N/mm², brick cracks fₜ = 2.0 N/mm²: docs/validation.md V8 (which cites
 //!   Lourenço and Rots 1997); not verified against the paper.
 //! * the model itself (tension cut-off, Coulomb friction and an elliptical cap; tensile
 //!   and cohesion softening, compressive hardening/softening, tension–shear coupling):
@@ -559,15 +559,15 @@ fn figure() {
 
 // The failure patterns at the end of each wall's run with the bricks at 0.026 m
 // (`pattern`): the experiments (Raijmakers and Vermeltfoort 1992, as described by
-// Lourenço 1996; BENCHMARKS.md V8) open horizontal cracks at the heels first (rocking),
+// Lourenço 1996; docs/validation.md V8) open horizontal cracks at the heels first (rocking),
 // then a diagonal stepped crack through joints and bricks, with the toes crushing, more so
 // at the higher pre-compressions. The open cracks are read at the end of the run; the
 // toes from the caps' history (κ₃, `Outcome::contact_history`), since J4D and J6D
 // unload down their softening branches (from 52.4 to 38.5 kN, from 84.0 to 49.3 kN) and
 // the compressed zone at each toe shrinks: at 4 mm their end stresses are 0.78–0.90 fₘ
 // with 9–12 contacts on the yield surface, where 21 at each toe yielded on the way.
-// Measured on 66fab1d + the history (docs/performance.md, "The toes from the caps'
-// history"): J4D at 4 mm (the end of the push) x–y correlation of the open contacts
+// Measured on 66fab1d + the history (docs/performance.md, "Eindhoven
+// walls"): J4D at 4 mm (the end of the push) x–y correlation of the open contacts
 // −0.51, 30 brick cracks open, 21 and 21 toe contacts whose cap yielded, both toes past
 // fₘ (κ₃ ≥ κₚ: crushed), heels 2 % and 2 % open; J6D at 4 mm −0.83, 41, 21 and 21, both
 // past fₘ, 1 % and 2 %; J7D at 2.07 mm (its end, in its snap-back) −0.92, 14, 20 and
@@ -705,8 +705,8 @@ fn eindhoven_j7d_sweep() {
 /// The contact-state corrector (docs/theory.md, Eq. F1–F2) carries J7D, as shipped,
 /// through the state where it stopped without it: before the corrector the run stopped at
 /// 2.088 mm, 117.9 kN, 0.3 % below its first peak of 118.3 kN, its iterations cycling
-/// between the states of 4–8 contacts at the kinks of their laws (docs/performance.md,
-/// "Constraint switching and the reload past the snap-back"). With it the path goes on
+/// between the states of 4–8 contacts at the kinks of their laws (docs/decisions/
+/// 0026-eindhoven-mesh-and-path.md). With it the path goes on
 /// past that point and down the wall's softening branch: the load must fall by more
 /// than 3 % below the first peak (ten times the old 0.3 %) before the run ends.
 ///

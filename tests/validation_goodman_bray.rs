@@ -1,5 +1,5 @@
 //! Toppling rock slope (Goodman and Bray 1976; Hoek and Bray, Rock Slope Engineering;
-//! BENCHMARKS.md V7): 16 columns on a stepped base, the worked example's geometry from
+//! docs/validation.md V7): 16 columns on a stepped base, the worked example's geometry from
 //! dfem's `slope` generator. Limit equilibrium (the block-by-block recursion, written
 //! independently in `tests/reference/goodman_bray.rs`) gives the friction angle at which
 //! the slope just stands: 38.16° (38.15° in the source). dfem's critical friction angle,

@@ -1,5 +1,5 @@
 //! One block on an incline under gravity (Hoek and Bray 1977; seed §4.1, Fig. 3;
-//! BENCHMARKS.md V1). With α the slope angle, φ the friction angle, b the breadth (along
+//! docs/validation.md V1). With α the slope angle, φ the friction angle, b the breadth (along
 //! the slope) and d the height:
 //!
 //! | mode                 | condition                      |

@@ -6,7 +6,7 @@
 //!   own (σyy = −γ (H − y), σxx = σxy = 0: in equilibrium with gravity, no traction on
 //!   the free sides and top): nothing is out of balance, so nothing moves. Reference: the
 //!   settlement of the same stack loaded by gravity from zero stress (closed form of
-//!   BENCHMARKS.md V9, checked in tests/validation_stack.rs); the in-situ run must move
+//!   docs/validation.md V9, checked in tests/validation_stack.rs); the in-situ run must move
 //!   less than 10⁻⁹ of it (round-off: the horizontal joints carry a constant traction,
 //!   which the node-to-node contacts integrate exactly).
 //! * A circular opening of radius a in a glued block mass under a hydrostatic in-situ

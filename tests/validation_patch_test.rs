@@ -1,4 +1,4 @@
-//! CST patch test (BENCHMARKS.md V9): on an irregular mesh of a non-convex block, a linear
+//! CST patch test (docs/validation.md V9): on an irregular mesh of a non-convex block, a linear
 //! displacement field imposed on the boundary nodes is reproduced exactly (to round-off)
 //! at every interior node, and every triangle carries the same uniform stress σ = Dₑ ε.
 //! Reference: the closed form itself (a CST represents any linear field exactly).

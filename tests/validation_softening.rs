@@ -1,6 +1,6 @@
 //! Softening joints through the static driver under displacement control
 //! (docs/theory.md, "Softening joints"; `[analysis] push_block`): a rigid block on a
-//! fixed one, joined by the Eindhoven joint of BENCHMARKS.md V8 (kₙ = 82 N/mm³,
+//! fixed one, joined by the Eindhoven joint of docs/validation.md V8 (kₙ = 82 N/mm³,
 //! kₛ = 36 N/mm³, fₜ = 0.25 N/mm², G_f^I = 0.018 N/mm, c = 0.35 N/mm², tan φ = 0.75,
 //! G_f^II = 0.125 N/mm; Lourenço and Rots 1997), in SI units.
 //!

@@ -1,4 +1,4 @@
-//! A stack of blocks under gravity (BENCHMARKS.md V9): the settlement is the sum over the
+//! A stack of blocks under gravity (docs/validation.md V9): the settlement is the sum over the
 //! joints below of (weight above) · h / (Eₙ · area), plus the blocks' own elastic
 //! shortening under σ_yy(z) = −γ (H_total − z) with σ_xx = 0 (free sides), plane strain:
 //! ε_yy = σ_yy (1 − ν²)/E. The centroid displacement of block k is the area average of

@@ -1,4 +1,4 @@
-//! Blocks under a horizontal coefficient (tilting table, pseudo-static; BENCHMARKS.md V2).
+//! Blocks under a horizontal coefficient (tilting table, pseudo-static; docs/validation.md V2).
 //! A block of breadth b and height d on a fixed base, gravity plus a horizontal body force
 //! λ·g: it topples at λ = b/d and slides at λ = tan φ, whichever comes first. A column of
 //! equal stacked blocks: the same thresholds with d the column's height (it rocks about

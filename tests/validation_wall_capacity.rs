@@ -1,5 +1,5 @@
 //! Lateral capacity of running-bond walls of rigid blocks against rigid-block limit
-//! analysis (BENCHMARKS.md V6's method applied to walls; Livesley 1978).
+//! analysis (docs/validation.md V6's method applied to walls; Livesley 1978).
 //!
 //! The reference is the static theorem as a linear program over the joint resultants
 //! (`tests/reference/arch.rs`, independent of dfem): the largest λ for which the blocks

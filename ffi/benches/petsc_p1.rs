@@ -1,4 +1,4 @@
-//! The PETSc backend on the exact matrix of BENCHMARKS.md P1 (`elast2d_353.mtx` and
+//! The PETSc backend on the exact matrix of docs/validation.md P1 (`elast2d_353.mtx` and
 //! `elast2d_353_rhs.mtx`, written by `cargo bench -p dfem-kernels --bench solvers --
 //! --write-mtx DIR` or the peers' gen_matrix.py) with the near-null space of the peers'
 //! harness (bench_petsc.py: rigid-body modes from the structured grid's coordinates), so

@@ -41,7 +41,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 /// Default relative tolerance of the Krylov solve on ‖b − A x‖₂ / ‖b‖₂: well below the
-/// out-of-balance tolerances of the analyses (≥ 1e-8, METHOD.md §4), so that PETSc's
+/// out-of-balance tolerances of the analyses (≥ 1e-8, docs/theory.md §4), so that PETSc's
 /// answers agree with the direct solvers' to about cond(A) × 1e-12.
 pub const DEFAULT_RTOL: f64 = 1e-12;
 

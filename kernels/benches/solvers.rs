@@ -1,4 +1,4 @@
-//! Benchmark P1 of `shared/BENCHMARKS.md`: the sparse direct and iterative solvers of
+//! Benchmark P1 of docs/validation.md: the sparse direct and iterative solvers of
 //! dfem-kernels on a 2D plane-strain CST elasticity matrix (n × n grid of unit-square
 //! cells split into two triangles, E = 1e4, ν = 0.2, thickness 1, bottom edge fixed,
 //! gravity plus a lateral load on the top edge; n = 353 gives 249,924 unknowns and

@@ -121,8 +121,8 @@ pub trait LinearBackend: Send {
     /// Counters and timers.
     fn stats(&self) -> &SolverStats;
     /// Solve `a` x = rhs in place, `a` on the pattern of the last factorized matrix and
-    /// differing from it by a change of low rank (a secant iteration of METHOD.md §4 in
-    /// which a few contacts changed state: ΔK = Σ over them of Bᵀ Δk B, METHOD.md §3),
+    /// differing from it by a change of low rank (a secant iteration of docs/theory.md §4 in
+    /// which a few contacts changed state: ΔK = Σ over them of Bᵀ Δk B, docs/theory.md §3),
     /// without refactorizing: the held factorization stays that of the old matrix and
     /// serves the next call too. Exact up to round-off (not an iteration). Errors when the
     /// change is too large to pay (every entry changed, a rank above the backend's cap),
@@ -152,7 +152,7 @@ pub trait LinearBackend: Send {
     /// that extra work ignore it (the default).
     fn set_failed_pivot_value(&mut self, _on: bool) {}
     /// Near-null space of the matrices to come: for elasticity of blocky structures, the
-    /// rigid-body modes (METHOD.md §2: two translations and the rotation about each
+    /// rigid-body modes (docs/theory.md §2: two translations and the rotation about each
     /// block's centroid, restricted to that block's unknowns), as dense vectors of length n.
     /// Algebraic multigrid builds its coarse spaces from them (PETSc GAMG); direct solvers
     /// and the built-in PCG ignore them (the default). Call before `factorize`.

@@ -17,7 +17,7 @@
 //! computed by `crate::partial` (private) on faer's symbolic structure, as the subdomains of
 //! [`crate::substructure`]), and S is factorized by [`FaerCholesky`] (AMD), sparse.
 //!
-//! **What it saves.** In a nonlinear iteration of METHOD.md §4 only contacts change state,
+//! **What it saves.** In a nonlinear iteration of docs/theory.md §4 only contacts change state,
 //! and a contact's stiffness enters K_RR alone: every block whose interior rows (K_{I_b I_b},
 //! K_{I_b R}) hold the same values, bit for bit, keeps its factor and its clique, and the
 //! refactorization is that of S — a matrix on the boundary unknowns only. A change of a few
@@ -98,7 +98,7 @@ struct Plan {
 /// work on — at most this share of the whole matrix's. The interiors' factorizations
 /// come on top only where a block's geometry changed (once an increment). On a 2D wall
 /// of bricks with contacts all round, the cliques of the bricks' boundaries make S cost
-/// more than the whole matrix (docs/performance.md, "Static condensation"), and the
+/// more than the whole matrix (docs/performance.md, "Static condensation of the blocks' interiors"), and the
 /// backend factorizes the whole matrix instead.
 pub const CONDENSE_MAX_SHARE: f64 = 0.5;
 
@@ -176,8 +176,7 @@ impl FaerCholeskyCondensed {
             // the AMD-ordered pattern leaves to the simplicial factorization; the
             // supernodal one factorizes those cliques with dense kernels: 16–20 % less
             // CPU time on the rocking column, whose time steps refactorize S at every
-            // iteration (docs/performance.md, "The blocks' interiors on the step's start
-            // geometry")
+            // iteration (docs/decisions/0021-start-geometry-interiors.md)
             root: FaerCholesky::new().with_supernodal_threshold(0.0),
             last: Vec::new(),
             factored: false,

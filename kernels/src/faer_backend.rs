@@ -240,17 +240,11 @@ pub(crate) fn cholesky_flops(pattern: &CsrPattern) -> Result<f64, SolveError> {
 /// entries of column j, with 40 times the threshold it is given ([`SupernodalThreshold`];
 /// 1 = faer's automatic choice, at a ratio of 40). dfem's matrices reach the crossover far
 /// below 40: the contacts couple whole blocks (a rigid block's three unknowns, a deformable
-/// block's contact nodes), which the supernodes take as dense blocks. One numeric
-/// factorization each, one thread, simplicial against supernodal (`cargo bench --bench
-/// supernodal`; docs/performance.md, "Supernodal from a flop ratio of 12"): ratio 5.6
-/// (the arch example) 0.017 against 0.018 ms; 10.7–11.7 (the wall and tunnel examples)
-/// the same; 13.1 (10 × 10 rigid wall) 0.099 against 0.067 ms; 21.2 (the column,
-/// uncondensed) 3.0 against 1.5 ms; 31.6 (30 × 30 rigid wall) 3.5 against 1.2 ms; 35.7
-/// (the Eindhoven wall J4D) 8.3 against 2.7 ms; 40.4 (P2, where faer switches) 9.4 against
-/// 2.5 ms. A supernodal solve costs up to twice a simplicial one on the small matrices
-/// (0.012 against 0.026 ms on the wall example), so the switch is set just above the
-/// crossover. faer's LU takes the same threshold on its own measure of L + U; there
-/// supernodal pays from smaller matrices still (the wall example: 0.83 against 0.28 ms).
+/// block's contact nodes), which the supernodes take as dense blocks. The supernodal
+/// factorization wins from a ratio of about 12 on (2.7–3.7× faster at 31.6–40), the
+/// simplicial one, with its cheaper solves, only below; faer's LU takes the same
+/// threshold on its own measure of L + U (`cargo bench --bench supernodal`;
+/// docs/decisions/0015-supernodal-flop-ratio.md).
 pub const SUPERNODAL_FLOP_RATIO: f64 = 12.0;
 /// faer's own factor on the flop ratio (`CHOLESKY_SUPERNODAL_RATIO_FACTOR` and
 /// `LU_SUPERNODAL_RATIO_FACTOR` in faer 0.24), by which its threshold is scaled.
@@ -562,17 +556,10 @@ impl CholeskyCore {
 pub struct FaerCholesky(CholeskyCore, LowRankCorrection);
 
 /// Default rank limit of [`FaerCholesky`]'s `solve_changed`: a correction of rank r costs
-/// about 0.18–0.32 of a numeric refactorization at r = 18–45, 0.34–0.44 at r = 180 and
-/// 0.73–1.03 at r = 449 on the 100 × 100 deformable wall (docs/performance.md, "The exact
-/// correction through the held factor"), but relatively more on a smaller model: in the
-/// static driver on the rigid P2 wall (4,860 unknowns) 0.45 of a refactorization with
-/// this limit (ranks ≤ 66), 0.80 with a limit of 256 (ranks ≤ 108: the held factor is
-/// kept longer and the change grows; both timed in one window), and on the 10⁵-unknown
-/// rigid wall 0.14–0.17 at ranks 18–46 (docs/performance.md, "The low-rank correction in
-/// the static driver"). The static driver keeps the change of a small model lower
-/// itself (`Driver::low_rank_limit` in src/analysis/statics.rs: a limit that grows with
-/// √n); this one bounds the largest, where a change of rank 180 still costs well under a
-/// refactorization.
+/// about 0.18–0.32 of a numeric refactorization at r = 18–45 and 0.73–1.03 at r = 449 on
+/// the 100 × 100 deformable wall, relatively more on smaller models, whose change the
+/// static driver keeps lower itself (`Driver::low_rank_limit` in
+/// src/analysis/statics.rs); docs/decisions/0012-low-rank-correction-limits.md.
 pub const CHANGED_MAX_RANK: usize = 256;
 
 /// Sparse LDLᵀ without pivoting (faer). Negative pivots are accepted (indefinite

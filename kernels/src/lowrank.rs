@@ -1,7 +1,7 @@
 //! Solves with a matrix that differs from a factorized one by a change on few unknowns,
 //! at about the cost of one solve with the held factor (issue 6: a secant iteration of
-//! METHOD.md §4 in which a few contacts changed state, their stiffness ΔK_c = Bᵀ Δk B
-//! of METHOD.md §3 added to the factorized K_old).
+//! docs/theory.md §4 in which a few contacts changed state, their stiffness ΔK_c = Bᵀ Δk B
+//! of docs/theory.md §3 added to the factorized K_old).
 //!
 //! **Method** (the Woodbury identity applied inside the factor). With the held factor
 //! P K_old Pᵀ = L Lᵀ ([`FaerCholesky`], P its fill-reducing permutation) and the change
@@ -80,7 +80,7 @@ const SINGULAR: f64 = 1e-9;
 /// With a rank limit r ([`LowRankCorrection::with_max_rank`]), a change with more than
 /// `ENTRIES_PER_RANK` × r nonzero entries is refused as soon as the scan of ΔK meets them
 /// (before any block is formed): a contact's Bᵀ Δk B has rank ≤ 2 and at most 8 × 8
-/// entries (two nodes of two unknowns on each face, METHOD.md §3), 32 entries per unit of
+/// entries (two nodes of two unknowns on each face, docs/theory.md §3), 32 entries per unit of
 /// rank, so this leaves a factor 2 while refusing a change of every entry (a new
 /// geometry) after reading about 64 r of them.
 const ENTRIES_PER_RANK: usize = 64;
@@ -1594,7 +1594,7 @@ mod tests {
     /// a 120 × 100 grid (24,000 unknowns, x and y uncoupled: two 12,000-unknown problems;
     /// factor about the size of the deformable 40 × 40 wall P2's): faer's
     /// sequential kernels against the [`Split`] in pools of 1 and 2 threads, 400 rounds
-    /// taken in turn, minimum and median printed (docs/performance.md, P2 section). Not a
+    /// taken in turn, minimum and median printed (docs/performance.md, "P2: the 40 × 40 wall against OpenSees"). Not a
     /// check of speed (that depends on the machine's load); the bits are checked.
     /// `cargo test --release -p dfem-kernels --lib split_substitution_timing -- --ignored --nocapture`
     #[test]

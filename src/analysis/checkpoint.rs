@@ -1,5 +1,5 @@
 //! Checkpoints of a dynamic run (docs/outputs.md, "Interrupted runs and --resume"): the
-//! whole state of the time integration (METHOD.md §6) between two steps, so that
+//! whole state of the time integration (docs/theory.md §5) between two steps, so that
 //! `dfem run --resume DIR` continues an interrupted run and reproduces the uninterrupted
 //! one to the bit.
 //!

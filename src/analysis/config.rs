@@ -1,4 +1,4 @@
-//! The current configuration of the model (updated Lagrangian, METHOD.md §4) and the
+//! The current configuration of the model (updated Lagrangian, docs/theory.md §4) and the
 //! internal forces of a trial increment: co-rotational CST stresses, so that a rigid
 //! rotation of any size produces no strain, and contact forces returned to the strength
 //! envelope by the contact law.
@@ -95,7 +95,7 @@ pub struct Trial {
     pub history: Vec<crate::material::History>,
 }
 
-/// The secant local stiffness (N/m) of a contact in a state (METHOD.md §4, step 1): the
+/// The secant local stiffness (N/m) of a contact in a state (docs/theory.md §4, step 1): the
 /// elastic springs when it sticks, no shear when it slips (the friction force is carried
 /// as a force, not a stiffness), nothing when it is open. The same rule gives the
 /// contacts' viscosities (N·s/m) from (cₙ, cₛ).
@@ -136,7 +136,7 @@ pub fn moved(cur: &Mesh, dq: &[f64], presc: &[Point]) -> (Mesh, Vec<Point>) {
 /// (the same nodes, triangles, blocks and contacts, in other positions: a configuration
 /// moved from `cur` or from one it was moved from, as every trial of a static run is),
 /// whose memory it reuses instead of a copy of `cur` (about 1.5 MB on the 40 × 40 wall of
-/// docs/performance.md, at every trial). Only what moves is written: every node's
+/// docs/decisions/0017-trial-evaluation-overhead.md, at every trial). Only what moves is written: every node's
 /// position, every block's unknowns and centroid, every contact's normal; the result is
 /// [`moved`]'s to the bit. A spare whose sizes are not `cur`'s is dropped for a copy.
 pub fn moved_reusing(
@@ -271,7 +271,7 @@ impl Inputs<'_> {
         for (t, s) in stress.iter().enumerate() {
             add_triangle_force(&mesh, inputs.thickness, t, s, &mut f_int);
         }
-        // the contacts: their laws, and their shares of F_int (METHOD.md §3: Fₙ gₙ + Fₛ gₛ on
+        // the contacts: their laws, and their shares of F_int (docs/theory.md §3: Fₙ gₙ + Fₛ gₛ on
         // each free unknown, with the map of the moved configuration), computed in parallel
         // into place, a slice of contacts at a time (1.2 MB of shares whatever the model's
         // size); the shares added serially in contact order after the triangles: the same

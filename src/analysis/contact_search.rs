@@ -1,4 +1,4 @@
-//! New contacts in large motion (METHOD.md §6: "falling blocks must find new contacts
+//! New contacts in large motion (docs/theory.md §5: "falling blocks must find new contacts
 //! (broad phase + narrow phase detection) rather than pass through each other").
 //!
 //! Between time steps, in the current (updated Lagrangian) geometry:
@@ -17,9 +17,9 @@
 //!   stretch, so the edge-to-edge case of
 //!   [`crate::geometry::joints::touching`] is the union of vertex-to-edge cases.
 //!
-//! Tributary length (the contact area is length × thickness, METHOD.md §3): half of each
+//! Tributary length (the contact area is length × thickness, docs/theory.md §3): half of each
 //! boundary segment adjoining the vertex that lies along the edge (its far end no more
-//! than `r` nearer to or farther from the edge's line than the vertex), clipped to the edge, as METHOD.md §3 takes "half of each adjoining
+//! than `r` nearer to or farther from the edge's line than the vertex), clipped to the edge, as docs/theory.md §3 takes "half of each adjoining
 //! segment"; a corner that meets an edge at an angle has no such segment and gets the
 //! band thickness `h`, the width over which a corner indents a band of thickness h
 //! (kₙ = Eₙ t, independent of h). See docs/theory.md, "New contacts".

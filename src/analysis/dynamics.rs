@@ -1,4 +1,4 @@
-//! Implicit dynamic analysis (METHOD.md §6): M ü + C u̇ + F_int(u) = F(t), seed Eq. 12,
+//! Implicit dynamic analysis (docs/theory.md §5): M ü + C u̇ + F_int(u) = F(t), seed Eq. 12,
 //! in the frame of the ground, F = gravity + `[[load]]` forces − M ι a_g(t); or, with
 //! `frame = "absolute"`, in a fixed frame with F = gravity + loads and the fixed blocks
 //! (the foundation) moved by the ground's displacement, integrated from a_g(t) with the
@@ -18,7 +18,7 @@
 //! with Newmark's a₁ = (Δu − h v₀ − h²(½ − β) a₀)/(β h²), v₁ = v₀ + h((1−γ) a₀ + γ a₁).
 //! The unknown of a step is its increment Δu, evaluated by the same co-rotational CST
 //! and contact return map as the static driver ([`Inputs::evaluate`]); the contact states are
-//! iterated within the step with the secant stiffness (METHOD.md §4), the effective
+//! iterated within the step with the secant stiffness (docs/theory.md §4), the effective
 //! matrix being (1−α_m)/(βh²) M + (1−α_f) γ/(βh) C + (1−α_f) K_s — positive definite
 //! even when blocks separate, thanks to the mass. The geometry is updated after every
 //! converged step (updated Lagrangian); a step that does not converge is halved.
@@ -84,22 +84,15 @@ const TANGENT_MAX_ITERATIONS: usize = 30;
 /// A step's iterations switch to tangent steps (once the contact states settle) only
 /// where the secant iteration contracts the out-of-balance norm by less than this
 /// factor an iteration, and then keep to them until a state changes. Always switching
-/// (factor 0) converged the rocking drums of docs/performance.md in 10,742 iterations
-/// instead of 11,202, but in the collapse of the seed's arch under Acc. No. 2
-/// (examples/seed_arch/acc2_inertia.toml) it led the blocks through contact sequences
-/// that needed 727,493 iterations instead of the secant driver's 24,365 (31,169 with
-/// this rule; over the two records at dt = 0.009, 0.01, 0.011 and 0.0125 s, 173,513
-/// iterations with it against the secant driver's 526,101).
+/// (factor 0) led the seed arch's collapse through contact sequences that cost 30 times
+/// the iterations (docs/decisions/0019-dynamic-tangent-steps.md).
 const TANGENT_SLOW: f64 = 0.5;
 /// Iterations of a try of a step (not of the smallest length) without progress after
 /// which it is given up and the step cut, as it would be after `max_iterations`:
 /// progress is an out-of-balance norm below [`STALL_PROGRESS`] of the try's best so
-/// far. In the traces of the seed arch's collapse under Acc. No. 1 and No. 2 at
-/// Δt = 0.009, 0.01, 0.011 and 0.0125 s (docs/performance.md, "Giving up a stalled
-/// step"), 11,407 of the 12,029 tries that converged did so within 10 iterations and 10
-/// went 20 iterations without halving their best norm, while 1,051 tries ran to the 100
-/// iterations and failed, cycling for most of them (periods of 2–6 iterations among the
-/// states of a few contacts at their kinks): 44 % of all the iterations.
+/// far. Tries that converge nearly all do so within 10 iterations; those that cycle
+/// among the states of a few contacts at their kinks held 44 % of the iterations
+/// (docs/decisions/0020-dynamic-stall-rule.md).
 const STALL_ITERATIONS: usize = 20;
 /// See [`STALL_ITERATIONS`].
 const STALL_PROGRESS: f64 = 0.5;
@@ -108,7 +101,7 @@ const STALL_PROGRESS: f64 = 0.5;
 /// the rocking drums of the `column` example turn by at most 4·10⁻⁴ rad in a step of
 /// 5 ms, the voussoirs of the seed's arch by up to 10⁻² rad a step as they fall, where a
 /// matrix on the start geometry slowed the iterations (tries of 12 iterations and more:
-/// 870 against 56 under Acc. No. 1).
+/// 870 against 56 under Acc. No. 1; docs/decisions/0021-start-geometry-interiors.md).
 const START_GEOMETRY_TURN: f64 = 1e-3;
 /// Factor on that spring per iteration the contact stays open.
 const OPEN_WEIGHT_DECAY: f64 = 0.1;
@@ -126,15 +119,10 @@ const FREEZE_FLIPS: u32 = 6;
 /// The largest force (fraction of the step's force scale, `Balance::scale`) a contact
 /// may have carried closed within a try for [`FREEZE_FLIPS`] to hold it open at a step
 /// length above the smallest. Held open only at the smallest length, such contacts
-/// (0.1–1 N on voussoirs of tens of kN in the seed arch's collapse) stalled try after
-/// try, each halving the step down to it and the step doubling back after: on the
-/// arch's eight runs under Acc. No. 1 and No. 2 (docs/performance.md, "The release redo
-/// from the first try, and chattering contacts held open") up to 1,402 tries given up in
-/// one run, and with the redo from the first try 19,538 in one at `tolerance` 1.25·10⁻⁶
-/// (72 s instead of 1). Held open at any length
-/// whatever their force, a box landing on its base was launched (the held contact's
-/// penetration, up to a tenth of the band, returned as elastic energy): a contact that
-/// carries a force that matters is never held open above the smallest length.
+/// stalled try after try; held open at any length whatever their force, a box landing on
+/// its base was launched (the held contact's penetration returned as elastic energy): a
+/// contact that carries a force that matters is never held open above the smallest
+/// length (docs/decisions/0022-release-redo-and-held-open-contacts.md).
 const HOLD_OPEN_FORCE: f64 = 1e-3;
 /// The least force (fraction of the step's force scale at its start, as
 /// [`HOLD_OPEN_FORCE`]) a contact closed at a step's start must carry there for its
@@ -143,10 +131,7 @@ const HOLD_OPEN_FORCE: f64 = 1e-3;
 /// of a running-bond wall under gravity) sits at the kink of its law: with its dashpots
 /// engaged while the trial is closed, the force jumps by cₙ δ̇ₙ and cₛ δ̇ₛ each time the
 /// iterations carry it across δₙ = 0, a law with no solution there that the iterations
-/// cycle around, whatever the step (with the joints' dashpots of
-/// docs/performance.md, "Dashpots of contacts that carry no force", a rigid 30 × 30 wall
-/// under El Centro took 5,692 iterations and 60 stalled tries for 1 s, against 816
-/// without dashpots). Such a contact damps nothing that matters; it takes its dashpots
+/// cycle around, whatever the step (docs/decisions/0023-dashpots-and-rayleigh.md). Such a contact damps nothing that matters; it takes its dashpots
 /// back at the first step it starts carrying a force.
 const DASHPOT_FORCE: f64 = 1e-3;
 /// Penetration (fraction of the band thickness) a contact held open may end a step with
@@ -318,7 +303,7 @@ fn invert3(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
 }
 
 /// Per contact: area A_c = length × thickness (m²), springs (kₙ, kₛ) (N/m) and
-/// viscosities (cₙ, cₛ) = (Eₙ*, Gₛ*) A_c / h (N·s/m), METHOD.md §3.
+/// viscosities (cₙ, cₛ) = (Eₙ*, Gₛ*) A_c / h (N·s/m), docs/theory.md §3.
 fn contact_coefficients(
     scene: &Scene,
     law: &MohrCoulomb,

@@ -1,4 +1,4 @@
-//! Failure mechanism (METHOD.md §4): which blocks move in the failing increment and how.
+//! Failure mechanism (docs/theory.md §4): which blocks move in the failing increment and how.
 //! The moving blocks are found from the failing increment (the mode); how each moves
 //! comes from the states of its contacts in the failing trial: a block with open
 //! contacts rotates about the closed ones (toppling or hinging), and does so while sliding
@@ -23,7 +23,7 @@ pub enum Motion {
     Sliding,
     Toppling,
     SlidingToppling,
-    /// No chain of contacts holds the block (an extension of INTERFACE.md's values).
+    /// No chain of contacts holds the block (an extension of the values of docs/outputs.md, "summary.json").
     Falling,
 }
 
@@ -44,7 +44,7 @@ impl Motion {
 pub struct Mechanism {
     /// (block index, motion) for every free block.
     pub blocks: Vec<(usize, Motion)>,
-    /// "sliding" | "toppling" | "sliding+toppling" | "mixed" (INTERFACE.md).
+    /// "sliding" | "toppling" | "sliding+toppling" | "mixed" (docs/outputs.md, "summary.json").
     pub mode: String,
 }
 

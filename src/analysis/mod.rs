@@ -167,7 +167,7 @@ pub struct Outcome {
     pub fallen: Vec<usize>,
 }
 
-/// Pivot ratio below which the factorization is taken as singular: a mechanism (METHOD.md
+/// Pivot ratio below which the factorization is taken as singular: a mechanism (docs/theory.md
 /// §4, "the global stiffness matrix becomes ill-conditioned"). Round-off on a singular
 /// matrix leaves ratios near 1e-16 times the condition of the rest; stiff joints on soft
 /// blocks stay far above 1e-12.
@@ -206,7 +206,7 @@ pub fn run_with(
         // a free block that touches nothing at all is a modelling mistake (misplaced
         // coordinates, a tolerance too small), not a structure
         // one pass over the contacts (a search per block was quadratic: 6 s of a 10⁵-unknown
-        // wall's 8.6 s run, docs/performance.md "Start-up, and the 10⁶-unknown wall")
+        // wall's 8.6 s run, docs/performance.md, "Growth with the size of the model")
         let mut touched = vec![false; mesh.blocks.len()];
         for c in &mesh.contacts {
             touched[c.block_l as usize] = true;

@@ -1,6 +1,6 @@
 //! The nonlinear solver under every analysis: the one iteration loop that static load
-//! increments, arc-length increments and time steps all go through (docs/theory.md,
-//! "Iterations").
+//! increments, arc-length increments and time steps all go through (docs/theory.md §4,
+//! "The iteration loop").
 //!
 //! A [`Problem`] holds an iterate (the unknowns' increment and its [`super::config::Trial`]: contact
 //! states, forces and the out-of-balance force) and knows how to assess it and correct
@@ -26,7 +26,7 @@ use crate::Result;
 
 /// A bonded contact that has changed between closed and open this many times in the
 /// iterations of one call of [`iterate`] breaks where they stall (closed → open → closed →
-/// open): docs/decisions, "Bonds that cannot hold".
+/// open): docs/decisions/0009-breaking-cycling-bonds.md.
 pub const BOND_BREAK_FLIPS: u32 = 3;
 
 /// The controls of one call of [`iterate`].

@@ -1,4 +1,4 @@
-//! Nonlinear static and capacity analysis (METHOD.md §4, seed §4): loads in increments of
+//! Nonlinear static and capacity analysis (docs/theory.md §4, seed §4): loads in increments of
 //! a load factor; in each increment, iterations in which the contacts' excess forces are
 //! re-applied (the residual λF − F_int) until the out-of-balance force is below a relative
 //! tolerance and no contact changes state; the geometry is updated after each converged
@@ -47,10 +47,8 @@ const MODE_STREAK: usize = 8;
 /// The free motion is taken when the out-of-balance norm after it is below this many
 /// times the norm after the iteration's own step: the norm is not what the motion
 /// lowers (see [`Driver::free_motion`]), and the next iteration, with the contact that
-/// stuck now holding the group, removes what it leaves. On the 60 × 60 wall of
-/// docs/performance.md ("Growth") 3 converged in 58 iterations, 1 (only motions that
-/// lower the norm) in 99 (measured with the motion after every singular iteration,
-/// before [`MODE_STREAK`]).
+/// stuck now holding the group, removes what it leaves
+/// (docs/decisions/0007-free-motion-constants.md).
 const MODE_ACCEPT: f64 = 3.0;
 
 /// The loads of one phase as functions of its load factor.
@@ -159,8 +157,8 @@ pub struct Driver<'a> {
 
 /// The most trial configurations [`Driver::recycle`] keeps: the line search evaluates
 /// one trial at a time and keeps the best, the iteration one, so that two spares serve
-/// nearly every trial; more would only hold memory (a mesh is 1.5 MB on the rigid P2 wall
-/// of docs/performance.md, 9,480 contacts, and grows with the contacts).
+/// nearly every trial; more would only hold memory
+/// (docs/decisions/0017-trial-evaluation-overhead.md).
 const SPARE_MESHES: usize = 2;
 
 /// A contact held in one state of its law for the rest of an arc-length increment: a
@@ -245,16 +243,16 @@ impl Load<'_> {
 
 /// An increment stops as not converged when its out-of-balance norm has not fallen below
 /// [`STALL_PROGRESS`] times its best value for this many iterations. Past the limit load
-/// the secant iterations stagnate at a fixed residual (a toppling block: 9 % of the load,
-/// for all 300 iterations), while converging increments near the limit, where contacts
-/// open and slip in waves, still gain 10 % within 60 iterations (the 30×30 wall of
-/// docs/performance.md: its slowest increment improves by that in at most 25).
+/// the secant iterations stagnate at a fixed residual, while converging increments near
+/// the limit still gain 10 % within at most 25 iterations
+/// (docs/decisions/0003-stall-window-and-tangent-fallback.md).
 const STALL_ITERATIONS: usize = 60;
 /// The stall windows of a capacity search's probes ([`Driver::stall_window`]): secant
 /// iterations, then tangent steps. Half the secant window still covers the slowest
 /// converging increment measured near the limit (10 % gained within 25 iterations, the
 /// 30×30 wall above); a probe that fails within them only narrows the bracket, and the
-/// failure that closes it is confirmed with the full windows.
+/// failure that closes it is confirmed with the full windows
+/// (docs/decisions/0004-capacity-probe-windows.md).
 const PROBE_STALL_ITERATIONS: usize = 30;
 const PROBE_TANGENT_STALL_ITERATIONS: usize = 10;
 /// Step lengths 1, ½, ¼, ⅛ of the line search on the out-of-balance norm.
@@ -662,7 +660,7 @@ impl<'a> Driver<'a> {
     /// shear that its equilibrium holds only with the contact in tension, past its
     /// strength, and open it carries nothing, and its equilibrium closes it again. No
     /// intact state is consistent, so the iterations cycle until the stall rule fails the
-    /// increment (a false collapse: the free-surface tunnel of docs/performance.md),
+    /// increment (a false collapse: the free-surface tunnel of docs/decisions/0009-breaking-cycling-bonds.md),
     /// where the brittle law says the bond has broken. Only where the increment would
     /// otherwise fail, so that a run whose increments converge is not changed. Returns
     /// whether a bond broke (the trial must then be evaluated again).

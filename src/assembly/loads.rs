@@ -1,4 +1,4 @@
-//! Load vectors (N): gravity and lateral body forces (METHOD.md §2: b = ρ g, lumped to the
+//! Load vectors (N): gravity and lateral body forces (docs/theory.md §2: b = ρ g, lumped to the
 //! nodes), and `[[load]]` forces, mapped to the unknowns through each node's map.
 
 use crate::geometry::polygon::{dot, norm, sub, Point};

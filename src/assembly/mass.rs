@@ -1,5 +1,5 @@
-//! Lumped mass (METHOD.md §2: Mₑ lumped, ρ t A / 3 per node and direction) and the
-//! influence vectors ι of a ground motion (METHOD.md §6). Built only by the dynamic
+//! Lumped mass (docs/theory.md Eq. B5: Mₑ lumped, ρ t A / 3 per node and direction) and the
+//! influence vectors ι of a ground motion (docs/theory.md §5). Built only by the dynamic
 //! driver: a static run does no mass work at all.
 
 use crate::geometry::polygon::{sub, Point};
@@ -13,7 +13,7 @@ use dfem_kernels::CONSTRAINED;
 /// * deformable block: a third of each triangle's mass ρ t A to each of its nodes, in
 ///   both directions;
 /// * rigid block: m = ρ t A on u and v, and the polar moment I = ρ t ∫ r² dA about the
-///   centroid on θ (METHOD.md §1: the three unknowns sit at the centroid).
+///   centroid on θ (docs/theory.md §1: the three unknowns sit at the centroid).
 ///
 /// The mass is computed once from the initial geometry (it is conserved).
 pub fn lumped(scene: &Scene, mesh: &Mesh) -> Vec<f64> {
@@ -73,7 +73,7 @@ pub fn polar_moment(poly: &[Point]) -> f64 {
 
 /// Influence vectors ι_x, ι_y: 1 on the unknowns that translate in x (resp. y) — a
 /// deformable node's u (v), a rigid block's centroid u (v) — and 0 elsewhere, rotations
-/// included. The ground-motion load is −M ι a_g (METHOD.md §6).
+/// included. The ground-motion load is −M ι a_g (docs/theory.md §5).
 pub fn influence(mesh: &Mesh) -> [Vec<f64>; 2] {
     let mut iota = [vec![0.0; mesh.n_dofs], vec![0.0; mesh.n_dofs]];
     for b in &mesh.blocks {

@@ -202,8 +202,8 @@ impl System {
         }
     }
 
-    /// Stiffness K (N/m) for elastic contact springs: CST blocks (METHOD.md §2,
-    /// Kₑ = t A Bᵀ Dₑ B) plus contacts (METHOD.md §3, K = Tᵀ K′ T).
+    /// Stiffness K (N/m) for elastic contact springs: CST blocks (docs/theory.md Eq. B4,
+    /// Kₑ = t A Bᵀ Dₑ B) plus contacts (docs/theory.md Eq. K4, K = Tᵀ K′ T).
     pub fn stiffness(&self, mesh: &Mesh, springs: &[ContactSprings]) -> CsrMatrix {
         let local: Vec<LocalStiffness> = springs.iter().map(|&k| diagonal(k)).collect();
         let mut k = CsrMatrix::zeros(self.plan.pattern().clone());
@@ -419,7 +419,7 @@ impl System {
             .reassemble(form, &changed, cache.values.as_ref(), kernel, out);
     }
 
-    /// Damping matrix C (N·s/m) of the Kelvin–Voigt viscosities (METHOD.md §2, §6), for a
+    /// Damping matrix C (N·s/m) of the Kelvin–Voigt viscosities (docs/theory.md §2, §5), for a
     /// system built [`System::for_dynamics`]:
     /// Cₑ = t A Bᵀ D_v B for the triangles and Tᵀ C′ T for the contacts, with a local
     /// viscosity per contact (cₙ = Eₙ* A_c / h, cₛ = Gₛ* A_c / h where they act).
@@ -518,7 +518,7 @@ fn contact_element(g: &[[f64; 2]], k: &LocalStiffness, form: Form, ke: &mut [f64
     }
 }
 
-/// Strain–displacement matrix B (1/m) of a CST and its area (m²), METHOD.md §2:
+/// Strain–displacement matrix B (1/m) of a CST and its area (m²), docs/theory.md Eq. B3:
 /// B = 1/(2A) `[[bᵢ,0,bⱼ,0,bₖ,0],[0,cᵢ,0,cⱼ,0,cₖ],[cᵢ,bᵢ,cⱼ,bⱼ,cₖ,bₖ]]`,
 /// bᵢ = yⱼ − yₖ, cᵢ = xₖ − xⱼ (cyclic).
 pub fn cst_b(p: [Point; 3]) -> ([[f64; 6]; 3], f64) {
@@ -544,7 +544,7 @@ pub fn cst_stiffness(p: [Point; 3], dt: &[[f64; 3]; 3], ke: &mut [f64]) {
     unpack_symmetric(6, &packed, ke);
 }
 
-/// CST stiffness Kₑ = A Bᵀ (t Dₑ) B (N/m, METHOD.md §2), its upper triangle packed by rows
+/// CST stiffness Kₑ = A Bᵀ (t Dₑ) B (N/m, docs/theory.md Eq. B4), its upper triangle packed by rows
 /// into `ke` (21 values (0,0), (0,1), …, (0,5), (1,1), …, (5,5); slots 2i and 2i + 1 are
 /// node i's x and y). B is sparse: node j's block of B is 1/(2A) `[[bⱼ,0],[0,cⱼ],[cⱼ,bⱼ]]`
 /// ([`cst_b`]), so K_ij = 1/(4A) `[[bᵢ,0,cᵢ],[0,cᵢ,bᵢ]]` (tDₑ) `[[bⱼ,0],[0,cⱼ],[cⱼ,bⱼ]]`: 14
@@ -616,7 +616,7 @@ pub struct ContactMap {
     pub g: [[f64; 2]; 12],
 }
 
-/// Contact `c`'s free unknowns and gradients ([`ContactMap`]; METHOD.md §3, the rows of
+/// Contact `c`'s free unknowns and gradients ([`ContactMap`]; docs/theory.md §3, the rows of
 /// T that give δₙ, δₛ).
 ///
 /// A node-to-node contact (no `along`, every contact of the static driver) takes a direct
@@ -686,7 +686,7 @@ fn node_to_node_map(mesh: &Mesh, c: &Contact) -> ContactMap {
 }
 
 /// Add the local force [Fₙ, Fₛ] (N) of contact `c` to the global vector `out`:
-/// out += Fₙ gₙ + Fₛ gₛ (the contact's share of F_int, METHOD.md §3).
+/// out += Fₙ gₙ + Fₛ gₛ (the contact's share of F_int, docs/theory.md §3).
 pub fn add_contact_force(mesh: &Mesh, c: &Contact, f: [f64; 2], out: &mut [f64]) {
     add_mapped_force(&contact_map(mesh, c), f, out);
 }

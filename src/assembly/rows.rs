@@ -4,7 +4,7 @@
 //! ([`crate::solve::block_partition`]: whole blocks, cuts along joints), the same partition
 //! the distributed linear backends (PETSc, MUMPS) use for their rows. Process r evaluates
 //! only the element matrices of the triangles and contacts that touch one of its own
-//! unknowns (METHOD.md §2 and §3): those are all the elements that add into its rows, so
+//! unknowns (docs/theory.md §2 and §3): those are all the elements that add into its rows, so
 //! its rows come out bit-identical to a serial assembly, and it evaluates about 1/N of the
 //! elements (plus the contacts along the cuts, which both sides evaluate). The processes
 //! then exchange their rows (`MPI_Allgatherv` of the values, [`dfem_ffi::allgather`]), so

@@ -1,4 +1,4 @@
-//! The command line (INTERFACE.md, "Command line"). Depends on everything; nothing depends
+//! The command line (docs/outputs.md, "Command line and exit status"). Depends on everything; nothing depends
 //! on it.
 
 mod progress;
@@ -202,7 +202,7 @@ pub fn main() -> ExitCode {
 /// the thousand (every trial of the static driver, every matrix product), which then start
 /// on it and hand only their split halves to the other threads. Without it every loop is
 /// handed from the main thread to a worker and back (a wake-up, a futex wait and a
-/// worker's idle spinning each time): on the rigid 40 × 40 wall of docs/performance.md,
+/// worker's idle spinning each time): on the rigid 40 × 40 wall of docs/decisions/0017-trial-evaluation-overhead.md,
 /// 3,852 futex calls and 16,588 yields of the idle worker in a run, and most of its
 /// system time.
 fn threads(n: Option<usize>) -> Result<()> {

@@ -1,4 +1,4 @@
-//! Touching edges between blocks (METHOD.md section 1: contacts are generated from the
+//! Touching edges between blocks (docs/theory.md §1: contacts are generated from the
 //! geometry, never typed by hand). A broad phase on an R-tree of bounding boxes finds the
 //! candidate pairs; the narrow phase finds antiparallel, collinear edge pairs within the
 //! tolerance and their common stretch: a [`JointSegment`].

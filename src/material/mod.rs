@@ -1,5 +1,5 @@
-//! Constitutive laws: the blocks' elastic matrix (METHOD.md section 2) and the contact
-//! band (METHOD.md section 3) behind the [`ContactLaw`] trait.
+//! Constitutive laws: the blocks' elastic matrix (docs/theory.md §2) and the contact
+//! band (docs/theory.md §3) behind the [`ContactLaw`] trait.
 
 pub mod cap;
 pub mod mohr_coulomb;
@@ -10,7 +10,7 @@ pub use softening::Softening;
 
 use crate::scene::{Joint, JointSoftening, Material, Plane};
 
-/// Elastic matrix Dₑ (Pa) in Voigt order (xx, yy, xy engineering shear), METHOD.md §2.
+/// Elastic matrix Dₑ (Pa) in Voigt order (xx, yy, xy engineering shear), docs/theory.md Eq. B1.
 /// Plane strain: [[λ+2μ, λ, 0], [λ, λ+2μ, 0], [0, 0, μ]]. Plane stress: the same with
 /// λ replaced by 2λμ/(λ+2μ) (σ_zz = 0).
 pub fn elastic_matrix(lambda: f64, mu: f64, plane: Plane) -> [[f64; 3]; 3] {
@@ -31,7 +31,7 @@ pub fn block_elastic(m: &Material, plane: Plane) -> [[f64; 3]; 3] {
 }
 
 /// Viscous matrix D_v (Pa·s) of a block material from its viscous Lamé constants
-/// (λ*, μ*), METHOD.md §2 (seed Eq. 8: σ = Dₑ ε + D_v ε̇), with the same plane reduction
+/// (λ*, μ*), docs/theory.md Eq. B2 (seed Eq. 8: σ = Dₑ ε + D_v ε̇), with the same plane reduction
 /// as [`elastic_matrix`]. Zero when the material has no viscosity.
 pub fn block_viscous(m: &Material, plane: Plane) -> [[f64; 3]; 3] {
     if m.viscous_mu == 0.0 && m.viscous_lambda == 0.0 {
@@ -52,7 +52,7 @@ pub fn young_poisson(lambda: f64, mu: f64) -> (f64, f64) {
     )
 }
 
-/// State of a contact (METHOD.md §3).
+/// State of a contact (docs/theory.md §3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum ContactState {
     Stick,
@@ -74,7 +74,7 @@ impl ContactState {
     }
 }
 
-/// Springs of one contact (N/m): kₙ = Eₙ A_c / h, kₛ = Gₛ A_c / h (METHOD.md §3).
+/// Springs of one contact (N/m): kₙ = Eₙ A_c / h, kₛ = Gₛ A_c / h (docs/theory.md Eq. K3).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactSprings {
     pub kn: f64,
@@ -158,7 +158,7 @@ impl PerContact<JointLaw> {
     }
 }
 
-/// The law of a `[[joint]]`: Mohr–Coulomb with tension cut-off (METHOD.md §3), or with
+/// The law of a `[[joint]]`: Mohr–Coulomb with tension cut-off (docs/theory.md §3), or with
 /// softening of the tensile strength and the cohesion (`softening = "exponential"`,
 /// [`Softening`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -223,7 +223,7 @@ impl ContactLaw for JointLaw {
     }
 }
 
-/// The elastic band without strength limits (METHOD.md §3, stick state everywhere).
+/// The elastic band without strength limits (docs/theory.md §3, stick state everywhere).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ElasticBand {
     /// Eₙ and Gₛ (Pa), band thickness h (m).

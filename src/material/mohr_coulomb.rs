@@ -1,4 +1,4 @@
-//! Tension cut-off and Mohr–Coulomb strength of the contact band (METHOD.md §3, seed §4).
+//! Tension cut-off and Mohr–Coulomb strength of the contact band (docs/theory.md Eq. K5, seed §4).
 //!
 //! Compression is negative. With the elastic trial forces Fₙ = Fₙ₀ + kₙ Δδₙ and
 //! Fₛ = Fₛ₀ + kₛ Δδₛ from the forces committed at the start of the increment:

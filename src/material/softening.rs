@@ -1,4 +1,4 @@
-//! The softening joint (METHOD.md §3; docs/theory.md, "Softening joints" and
+//! The softening joint (docs/theory.md §3, "Softening joints" and
 //! "Compression cap"): tension cut-off and Mohr–Coulomb strength whose tensile strength
 //! and cohesion soften exponentially with the fracture energies G_f^I and G_f^II,
 //! friction remaining, and optionally the elliptic compression cap of [`super::cap`],
@@ -430,7 +430,7 @@ impl Softening {
     /// plastic length (backward Euler, exact under uniaxial compression). Friction is left
     /// out: it dissipates in whichever direction a joint slips, so an unloading that slides
     /// the joints back would dissipate as much as a crack that grows, while ξ and κ₃ only
-    /// grow (METHOD.md §3). The constraint of the dissipation-based arc length (Gutiérrez
+    /// grow (docs/theory.md §3). The constraint of the dissipation-based arc length (Gutiérrez
     /// 2004, Verhoosel et al. 2009) in src/analysis/statics/arc_length.rs.
     pub fn softening_work(
         &self,
@@ -456,7 +456,7 @@ impl Softening {
 mod tests {
     use super::*;
 
-    /// Eindhoven joint data of BENCHMARKS.md V8 in SI units: kₙ = 82 N/mm³, kₛ = 36 N/mm³
+    /// Eindhoven joint data of docs/validation.md V8 in SI units: kₙ = 82 N/mm³, kₛ = 36 N/mm³
     /// with a 10 mm band, fₜ = 0.25 MPa, G_f^I = 0.018 N/mm, c = 0.35 MPa, tan φ = 0.75,
     /// G_f^II = 0.125 N/mm.
     pub(crate) fn eindhoven() -> Softening {
@@ -476,7 +476,7 @@ mod tests {
         }
     }
 
-    /// [`eindhoven`] with the cap of Lourenço and Rots (1997) as BENCHMARKS.md V8 gives
+    /// [`eindhoven`] with the cap of Lourenço and Rots (1997) as docs/validation.md V8 gives
     /// it (fₘ = 10.5 N/mm², C_ss = 9) and the hardening/softening data of the example
     /// (`energy`: G_fc (N/m) and κₚ (m); `None`: perfectly plastic).
     fn with_cap(energy: Option<(f64, f64)>) -> Softening {

@@ -1,5 +1,5 @@
 //! Mesh: nodes, constant-strain triangles, rigid-block degrees of freedom and contact
-//! elements (METHOD.md sections 1–3).
+//! elements (docs/theory.md §1–3).
 //!
 //! Every block's boundary holds its corners plus the *contact nodes*: the projections of
 //! the neighbours' corners onto each shared edge (and, with a `mesh_size`, the points that
@@ -41,7 +41,7 @@ pub struct MeshBlock {
     pub centroid: Point,
 }
 
-/// A node-to-node contact element (METHOD.md section 3).
+/// A node-to-node contact element (docs/theory.md §3).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Contact {
     /// Node `l` on block `block_l`, node `m` on block `block_m`, at the same position.
@@ -59,7 +59,7 @@ pub struct Contact {
     /// Index of the joint segment it belongs to (`u32::MAX` for a contact found during a
     /// dynamic run).
     pub segment: u32,
-    /// A vertex-to-edge contact found during a large motion (METHOD.md §6): the l side is
+    /// A vertex-to-edge contact found during a large motion (docs/theory.md §5): the l side is
     /// the point at this fraction (0 to 1) along `edge_l` (two consecutive boundary nodes
     /// of block l), not a node; `node_l` is then the nearer end of that edge.
     pub along: Option<f64>,
@@ -229,7 +229,7 @@ impl Mesh {
     }
 
     /// Recompute every contact's normal from the current positions of its edge's corners
-    /// (updated Lagrangian geometry, METHOD.md §3: the angle of n comes from the edge).
+    /// (updated Lagrangian geometry, docs/theory.md §3: the angle of n comes from the edge).
     pub fn update_normals(&mut self) {
         for c in &mut self.contacts {
             let (a, b) = (

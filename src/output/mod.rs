@@ -1,4 +1,4 @@
-//! Results: `summary.json` (INTERFACE.md, "Results") and ParaView files. Every file is
+//! Results: `summary.json` (docs/outputs.md, "summary.json") and ParaView files. Every file is
 //! written to a temporary name in the same directory and renamed, so a reader never sees
 //! a half-written result.
 

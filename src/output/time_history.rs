@@ -1,6 +1,6 @@
 //! The time-history figure of a dynamic run (`DIR/figures/history.png/.svg`, as the seed's
 //! Fig. 6b draws it): the displacements ux and uy (m, relative to the ground, centroid of
-//! each block; METHOD.md §6) of the tracked blocks against the time t (s), read from the
+//! each block; docs/theory.md §5) of the tracked blocks against the time t (s), read from the
 //! columns `NAME.ux`, `NAME.uy` of history.csv (docs/outputs.md). Two panels, ux above and
 //! uy below, sharing the time axis; one colour per block.
 

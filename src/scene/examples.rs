@@ -462,7 +462,7 @@ macro_rules! eindhoven_wall {
             ", pre-compression ",
             $p,
             " N/mm2 (Raijmakers and Vermeltfoort 1992)\"\n",
-            r#"# The micro-model of Lourenco and Rots (1997), BENCHMARKS.md V8 (docs/performance.md,
+            r#"# The micro-model of Lourenco and Rots (1997), docs/validation.md V8 (docs/performance.md,
 # "Eindhoven walls"): solid clay bricks 210 x 52 x 100 mm with 10 mm mortar joints,
 # modelled as expanded bricks (brick plus half a joint all round) with zero-thickness
 # joints; E = 16700 N/mm2, nu = 0.15 (plane stress, 100 mm thick). Every full brick is
@@ -474,7 +474,7 @@ macro_rules! eindhoven_wall {
 # way": Lourenco 1996), the load followed by the dissipation-based arc length through
 # the peak and the snap-backs (curve.csv: force_x_N against ux_m). Mortar: kn = 82 N/mm3, ks = 36 N/mm3 (over a 10 mm band), ft = 0.25 N/mm2,
 # G_f^I = 0.018 N/mm, c = 0.35 N/mm2, tan(phi) = 0.75, G_f^II = 0.125 N/mm, compressive
-# strength 10.5 N/mm2 (BENCHMARKS.md V8); cap C_ss = 9, G_fc = 5 N/mm, kappa_p =
+# strength 10.5 N/mm2 (docs/validation.md V8); cap C_ss = 9, G_fc = 5 N/mm, kappa_p =
 # 0.093 mm, brick cracks G_f^I = 0.08 N/mm (Lourenco 1996 as recalled, not checked
 # against the source); brick cracks c = 1.4 ft, phi = 45 deg, G_f^II = 10 G_f^I
 # (assumed). The bricks are meshed at 26 mm (two triangles' height through a brick's

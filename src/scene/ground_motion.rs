@@ -1,9 +1,9 @@
-//! Ground motion of a dynamic analysis (`[analysis] ground_motion`, INTERFACE.md): a
+//! Ground motion of a dynamic analysis (`[analysis] ground_motion`, docs/scene-reference.md): a
 //! record read from a file (PEER `at2`, `csv` with columns t and acceleration, plain
 //! `values` at a constant `dt`), values written inline, or an expression of the time `t`.
 //!
 //! The acceleration a_g(t) (m/s²) enters the relative-frame equation of motion as the
-//! load −M ι a_g(t) (METHOD.md §6). Between samples it is interpolated linearly; before
+//! load −M ι a_g(t) (docs/theory.md §5). Between samples it is interpolated linearly; before
 //! the first sample and after the last one it is zero (the record has ended).
 //!
 //! Errors name the scene line of the `ground_motion` key and, for a record, the record's
@@ -12,7 +12,7 @@
 use super::STANDARD_GRAVITY;
 use std::path::{Path, PathBuf};
 
-/// Direction of the shaking (the ι of METHOD.md §6).
+/// Direction of the shaking (the ι of docs/theory.md §5).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Direction {
     X,
@@ -33,7 +33,7 @@ impl Direction {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Frame {
     /// The frame of the ground: the fixed blocks stay put and the free blocks carry the
-    /// load −M ι a_g(t) (METHOD.md §6). The default.
+    /// load −M ι a_g(t) (docs/theory.md §5). The default.
     #[default]
     Relative,
     /// A fixed frame: the fixed blocks (the foundation) move with the ground, their

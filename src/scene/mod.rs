@@ -1,4 +1,4 @@
-//! Scene: the validated model read from a TOML file (`INTERFACE.md`, "Scene file").
+//! Scene: the validated model read from a TOML file (docs/scene-reference.md).
 //!
 //! [`parse`] turns text into a [`Scene`], checking everything before any work is done;
 //! [`generate`] expands `[[generate]]` entries into blocks; [`import`] reads blocks from
@@ -15,7 +15,7 @@ pub mod settings;
 pub use parse::{load, parse_str};
 pub use settings::{AnalysisSettings, DynamicSettings, StaticSettings};
 
-/// 2D idealisation of the out-of-plane direction (METHOD.md section 1).
+/// 2D idealisation of the out-of-plane direction (docs/theory.md §1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Plane {
     Strain,
@@ -56,7 +56,7 @@ impl InSitu {
     }
 }
 
-/// `[[material]]`: an elastic (Kelvin–Voigt) block material (METHOD.md section 2).
+/// `[[material]]`: an elastic (Kelvin–Voigt) block material (docs/theory.md §2).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -72,7 +72,7 @@ pub struct Material {
     pub viscous_mu: f64,
 }
 
-/// Standard gravity used to turn a unit weight into a mass density (METHOD.md, units).
+/// Standard gravity used to turn a unit weight into a mass density (docs/theory.md, "Units").
 pub const STANDARD_GRAVITY: f64 = 9.81;
 
 impl Material {
@@ -82,7 +82,7 @@ impl Material {
     }
 }
 
-/// `[[joint]]`: band-type contact properties (METHOD.md section 3).
+/// `[[joint]]`: band-type contact properties (docs/theory.md §3).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Joint {
     pub name: String,
@@ -140,7 +140,7 @@ pub struct JointCap {
 /// `[[joint]] softening`: how the tensile strength and the cohesion degrade.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum JointSoftening {
-    /// Constant strengths (the Mohr–Coulomb band of METHOD.md §3).
+    /// Constant strengths (the Mohr–Coulomb band of docs/theory.md §3).
     #[default]
     None,
     /// Exponential softening governed by the fracture energies (Lourenço and Rots 1997).

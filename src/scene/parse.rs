@@ -1,6 +1,6 @@
 //! TOML text → validated [`Scene`]. Everything is checked before any work: syntax, types,
 //! unknown keys, moduli, names, polygons, overlaps. Every error names the file, the line,
-//! the block or key, and the fix (INTERFACE.md, "Exit status").
+//! the block or key, and the fix (docs/outputs.md, "Command line and exit status").
 
 use super::generate::{self, GenError};
 use super::import;

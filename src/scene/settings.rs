@@ -99,7 +99,8 @@ pub struct StaticSettings {
     /// default off): the first corrections of an increment are then solved by conjugate
     /// gradients preconditioned with it, corrected for the contacts that changed state
     /// (docs/theory.md, "Factorizations across increments"). Fewer factorizations, but
-    /// on the measured walls no faster, hence off.
+    /// no faster on the measured walls, hence off
+    /// (docs/decisions/0013-reuse-across-increments-off.md).
     pub reuse_across_increments: bool,
     /// Increments of the gravity phase (`gravity_steps`); `None`: `load_steps`.
     pub gravity_steps: Option<usize>,
@@ -188,8 +189,7 @@ pub struct ArcLength {
     pub accept: f64,
 }
 
-/// Parameters of a member of the generalized-α family (docs/theory.md, "Time
-/// integration").
+/// Parameters of a member of the generalized-α family (docs/theory.md §5).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Scheme {
     pub alpha_m: f64,

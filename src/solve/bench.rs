@@ -1,5 +1,5 @@
 //! `dfem bench-solvers`: every linear backend of this build on one matrix, the elastic
-//! stiffness of a scene at its first solve (K of METHOD.md §2–3 with the contacts'
+//! stiffness of a scene at its first solve (K of docs/theory.md §2–3 with the contacts'
 //! elastic springs, the load vector of the scene), and one table of what each costs.
 
 use super::{backend_with, BackendOptions};

@@ -115,7 +115,7 @@ pub fn tangent_backend(main: &str) -> crate::Result<Box<dyn LinearBackend>> {
 /// The rigid-body modes of the blocks, as the near-null space of the stiffness matrix
 /// ([`LinearBackend::set_near_null_space`]): three vectors of length `mesh.n_dofs`, the
 /// translation in x, the translation in y and the in-plane rotation, each block moving
-/// rigidly about its own centroid (METHOD.md §2: a block's elastic energy vanishes on these
+/// rigidly about its own centroid (docs/theory.md §2: a block's elastic energy vanishes on these
 /// motions; only the contact springs of §3 resist them). On a deformable block's node at
 /// (x, y) the rotation is (−(y − y_c), x − x_c); a rigid block's unknowns (u, v, θ) get
 /// (1, 0, 0), (0, 1, 0), (0, 0, 1). Lengths in m; fixed blocks have no unknowns.

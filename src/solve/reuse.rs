@@ -177,7 +177,7 @@ fn sdot(x: &[f64], y: &[f64]) -> f64 {
     x.iter().zip(y).map(|(a, b)| a * b).sum()
 }
 
-/// Solve `k · x = r` for a nonsymmetric `k` (Newton's tangent, METHOD.md §4) by GMRES,
+/// Solve `k · x = r` for a nonsymmetric `k` (Newton's tangent, docs/theory.md §4) by GMRES,
 /// right-preconditioned with the factorization that `backend` holds (of a nearby symmetric
 /// matrix: the secant stiffness, of which the tangent differs by the slipping contacts'
 /// friction–normal coupling). Full (unrestarted) Arnoldi with modified Gram–Schmidt and

@@ -191,8 +191,8 @@ impl Dynamics<'_> {
                 }
                 // the redo starts from the first try's answer, which differs from the
                 // redo's by the released contacts' small share of the start: 2–3
-                // iterations instead of the 5–7 of a start from rest (docs/performance.md,
-                // "The release redo from the first try")
+                // iterations instead of the 5–7 of a start from rest (docs/decisions/
+                // 0022-release-redo-and-held-open-contacts.md)
                 let first = accepted.as_ref().map(|acc| acc.trial.dq.clone());
                 self.release(&released);
                 let before = self.stats.iterations;

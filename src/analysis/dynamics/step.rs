@@ -1,12 +1,12 @@
 //! The balance of a time step and the linear algebra of its corrections: the scheme's
 //! out-of-balance force, the effective matrix (1−α_m)/(βh²) M + (1−α_f) γ/(βh) C +
 //! (1−α_f) K_s with the contacts' dashpots and Rayleigh damping, the tangent step by GMRES
-//! on its factorization, and the line search (docs/theory.md, "Time integration").
+//! on its factorization, and the line search (docs/theory.md §5).
 
 use super::*;
 
 impl Dynamics<'_> {
-    /// The out-of-balance force of a trial increment `dq` of a step (METHOD.md §6, the
+    /// The out-of-balance force of a trial increment `dq` of a step (docs/theory.md §5, the
     /// generalized-α balance): r = F_ext − M a_{1−α_m} − (1−α_f)(C v₁ + F_int(q₁)) −
     /// α_f (C v₀ + F_int(q₀)) (N), with the Newmark kinematics of `k` for a₁ and v₁; the
     /// viscous forces C v₁ of the trial states (the dashpots of closed contacts, the
@@ -42,8 +42,8 @@ impl Dynamics<'_> {
             // step's start (the committed stiffness, as OpenSees' `betaKcomm`), on the
             // trial's geometry: with the trial's states, a contact that changed between
             // stick and slip switched a₁ kₛ δ̇ₛ on and off, and the iterations cycled about
-            // it (a rigid wall under El Centro failed within 0.02 s: docs/performance.md,
-            // "Rayleigh damping on the step's start states"); none from a contact with no
+            // it (a rigid wall under El Centro failed within 0.02 s:
+            // docs/decisions/0023-dashpots-and-rayleigh.md); none from a contact with no
             // force at the start (`DASHPOT_FORCE`), nor across one open in the trial (no
             // damping force across an open band, as for the dashpots)
             let local: Vec<LocalStiffness> = (0..self.springs.len())
@@ -353,7 +353,7 @@ impl Dynamics<'_> {
     /// always the trial geometry's). The interior rows of a block on the start geometry
     /// then stay the same within a step, and the condensed backend does not refactorize
     /// its interior after the step's first iteration (on the rocking drums of
-    /// docs/performance.md, "The blocks' interiors on the step's start geometry", those
+    /// docs/decisions/0021-start-geometry-interiors.md, those
     /// refactorizations had taken a third of the run). The contacts stay in the trial's
     /// geometry: with them on the start's too, the seed arch's voussoirs, which turn by
     /// up to 10⁻² rad within a step of the collapse, took 2–11 times the iterations.

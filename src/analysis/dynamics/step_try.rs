@@ -1,6 +1,6 @@
 //! One try of a time step as a [`Problem`] of the nonlinear solver
 //! ([`crate::analysis::solver`]): the step's increment Δu iterated until the balance of
-//! the scheme (docs/theory.md, "Time integration") is within the tolerance and no loaded
+//! the scheme (docs/theory.md §5) is within the tolerance and no loaded
 //! contact changes state. The corrections: the secant effective matrix, with the
 //! anti-chatter rules of the contacts that keep opening and closing within the step (their
 //! normal spring kept, weakened while open, or the contact held open), a tangent step by
@@ -233,8 +233,8 @@ impl Problem for StepTry<'_, '_> {
         // contacts' friction, which depends on their normal force: the secant matrix
         // leaves that out (and keeps kₛ on contacts that flipped between stick and slip),
         // so its iterations may contract slowly; a tangent step closes them in one or
-        // two. Taken only where the secant iteration is slow ([`TANGENT_SLOW`]), and then
-        // until a state changes.
+        // two (docs/decisions/0019-dynamic-tangent-steps.md). Taken only where the secant
+        // iteration is slow ([`TANGENT_SLOW`]), and then until a state changes.
         let bal = &self.bal;
         let tangent = it > 1
             && !changed

@@ -27,7 +27,7 @@
 //! Σ_contacts A (G Δξ + σ̄(κ₃) Δκ₃) = Δτ                           (theory.md, Eq. A2)
 //! ```
 //!
-//! (J; [`crate::material::Softening::softening_work`], METHOD.md §3 for the law), a local
+//! (J; [`crate::material::Softening::softening_work`], docs/theory.md §3 for the law), a local
 //! constraint: only the contacts where a crack grows or a toe crushes take part, where the
 //! cylinder measures all unknowns and lets a local snap-back or an elastic mode pass.
 //! An increment whose dissipation constraint cannot be met falls back to displacement
@@ -48,7 +48,7 @@ mod path_step;
 /// Changes of state of a contact within one arc-length increment after which it is
 /// frozen at the chord of its law from its committed force (the contact-state corrector,
 /// docs/theory.md, Eq. F1; its secant the elastic springs): on the Eindhoven wall
-/// (docs/performance.md) contacts at the kinks of their laws (the peak of a softening
+/// (docs/decisions/0027-contact-state-corrector-and-chords.md) contacts at the kinks of their laws (the peak of a softening
 /// joint, the onset of slip, a brick crack closing) alternated between the two sides for
 /// every iteration of an increment, and on the snap-back joint of
 /// tests/validation_softening.rs Newton cycled at the peak with the residual between
@@ -133,7 +133,7 @@ const SWITCH_FRACTION: f64 = 0.1;
 /// The steps α = 1, ½, …, 2¹⁻ⁿ of the backtracking of a correction
 /// ([`Driver::backtrack`]), n this constant: the first that does not raise the
 /// out-of-balance force is taken, else the best of them. Past J4D's peak
-/// (docs/performance.md, "Eindhoven walls") the iterations cycled with the residual
+/// (docs/decisions/0027-contact-state-corrector-and-chords.md) the iterations cycled with the residual
 /// halving at α = ½ for six iterations and then rising 20-fold at every α down to ⅛: a
 /// brick crack (kₙ ≈ 2·10¹² N/m for a 26 mm contact) that closes within 4·10⁻⁸ m of the
 /// iterate, so that a step short of its closure is 10⁻³ of the Newton step. With the
@@ -216,7 +216,7 @@ enum StepFailure {
 /// equilibrium by moving the contact a negligible distance while the true law does not
 /// follow, and the checks of Eq. F2 return to the same point. With the bound J4D
 /// converges in 14 % fewer iterations to the same curve and J7D goes on down its
-/// softening branch (docs/performance.md, "Bounded chords"). A bounded slope keeps the
+/// softening branch (docs/decisions/0027-contact-state-corrector-and-chords.md). A bounded slope keeps the
 /// frozen law through (`d`, `f`), so the check at the point reached still reads the
 /// true force there.
 fn chord_law(
@@ -1049,7 +1049,7 @@ mod tests {
     }
 
     /// The law's tangent on each side of the Coulomb kink and in tension, against the
-    /// closed forms of METHOD.md §3: stick diag(kₙ, kₛ); slip Fₛ = −sgn(Fₛ) tan φ Fₙ,
+    /// closed forms of docs/theory.md §3: stick diag(kₙ, kₛ); slip Fₛ = −sgn(Fₛ) tan φ Fₙ,
     /// so ∂Fₛ/∂δₙ = −sgn(Fₛ) tan φ kₙ and ∂Fₛ/∂δₛ = 0; open nothing.
     #[test]
     fn law_tangent_matches_the_closed_forms_on_each_side_of_the_kink() {

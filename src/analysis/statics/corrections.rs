@@ -2,43 +2,34 @@
 //! secant matrix factorized with its symbolic phase reused, the held factorization
 //! corrected for the contacts that changed state by a low-rank update, tangent steps by
 //! GMRES on the held factor or by an LU, the blended step K_s + ε K₀ where the secant matrix
-//! is singular, and the buffers they assemble into (docs/theory.md, "Corrections").
+//! is singular, and the buffers they assemble into (docs/theory.md §4, "Increments and iterations").
 
 use super::*;
 
 /// A secant correction reuses the held factorization as a preconditioner when at most this
-/// many contacts changed state since it was computed. Each changed contact is a rank-1 or
-/// rank-2 change of K, and conjugate gradients need about one iteration per unit of rank
-/// plus three for the change of geometry (measured on the 30×30 wall of
-/// docs/performance.md: 0 changes → 3 iterations, 5–9 → 6–10, 20–24 → 18–25), while one
-/// iteration (a solve pair and a product with K) costs a tenth to a twentieth of a numeric
-/// factorization on the walls of docs/performance.md. Since the low-rank path
-/// ([`Driver::changed`]) takes the changes on an unchanged geometry, this applies to the
-/// first correction of an increment (a new geometry: the held factorization is then a
-/// preconditioner only) and to changes the backend refused; on the P2 walls the other
-/// first corrections come after 8–2,500 changes (5 of the deformable wall's 35 take
-/// conjugate gradients, none of the rigid wall's), so the limit was left as it was.
+/// many contacts changed state since it was computed: conjugate gradients need about one
+/// iteration per unit of rank of the change plus three for a change of geometry, and an
+/// iteration costs a tenth to a twentieth of a numeric factorization. Since the low-rank
+/// path ([`Driver::changed`]) takes the changes on an unchanged geometry, this applies to
+/// the first correction of an increment and to changes the backend refused
+/// (docs/decisions/0012-low-rank-correction-limits.md).
 pub(super) const REUSE_MAX_CHANGES: usize = 4;
 /// The iteration matrix is updated ([`System::stiffness_update`]) rather than assembled
 /// again when at most 1/`UPDATE_MAX_SHARE` of the contacts changed their local stiffness:
 /// the update finds the entries and elements a changed contact touches one by one, which
-/// on the rigid P2 wall of docs/performance.md costs more than assembling all contacts
-/// once 1/8 of them changed (a tangent step after a secant one changes every slipping
-/// contact's).
+/// costs more than assembling all contacts once many changed (a tangent step after a
+/// secant one changes every slipping contact's; docs/decisions/0010-gmres-tangent-steps.md).
 pub(super) const UPDATE_MAX_SHARE: usize = 32;
 /// GMRES iterations of a tangent correction preconditioned with the held secant
 /// factorization ([`Driver::tangent_with_secant_factor`]) after which the tangent matrix is
-/// factorized with LU instead: an LU factorization of the tangent costs about 4–5
-/// Cholesky factorizations of the secant matrix, or 40 preconditioned iterations, on the
-/// P2 wall of docs/performance.md.
+/// factorized with LU instead: an LU of the tangent costs about 40 preconditioned
+/// iterations (docs/decisions/0010-gmres-tangent-steps.md).
 pub(super) const TANGENT_MAX_ITERATIONS: usize = 30;
 /// A tangent correction of the secant strategy that GMRES on the secant factorization did
 /// not solve is solved with an LU factorization of the tangent only when the held Cholesky
-/// factor has at most this many entries; above, the secant correction is taken instead.
-/// On the rigid 10⁶-unknown wall of docs/performance.md (Cholesky factor 1.66·10⁸
-/// entries, 1.3 GB) the LU raised the resident memory from 5.6 to 11.6 GB and failed; on
-/// the 10⁵-unknown wall (1.28·10⁷ entries) it fits in well under 1 GB. 5·10⁷ Cholesky
-/// entries (0.4 GB) lets an LU of up to about 4× that (2.4 GB with its indices) through.
+/// factor has at most this many entries; above, the secant correction is taken instead
+/// (an LU of the 10⁶-unknown wall's tangent ran out of memory;
+/// docs/decisions/0011-tangent-lu-size-limit.md).
 pub(super) const TANGENT_LU_MAX_ENTRIES: usize = 50_000_000;
 /// The loosest relative residual of a tangent correction by GMRES.
 pub(super) const TANGENT_TOLERANCE: f64 = 1e-3;
@@ -48,11 +39,7 @@ pub(super) const REUSE_MAX_ITERATIONS: usize = 8;
 /// On the rigid P2 wall a secant correction is solved with the held factorization
 /// corrected for the change ([`Driver::changed`]) when at most this many contacts changed
 /// state since it was computed (each a change of rank ≤ 2); larger models allow more
-/// ([`Driver::low_rank_limit`]). Measured on the rigid P2 wall of docs/performance.md (each correction timed
-/// in the driver, one window): with 64 (and rank 128) the corrections change a median 22
-/// contacts and cost 0.45 of a refactorization; with 128 (and rank 256) the held factor
-/// is kept longer, the corrections change a median 55 contacts and cost 0.80 of one,
-/// for 39 factorizations instead of 47.
+/// ([`Driver::low_rank_limit`]; docs/decisions/0012-low-rank-correction-limits.md).
 pub(super) const LOW_RANK_MAX_CHANGES: usize = 64;
 /// Unknowns of the rigid P2 wall, where [`LOW_RANK_MAX_CHANGES`] was measured. The
 /// break-even rank of the correction grows with the model ([`Driver::low_rank_limit`]).
@@ -151,7 +138,7 @@ impl Driver<'_> {
     ///
     /// The matrix is assembled on the geometry of the last converged increment, not the
     /// trial's: the out-of-balance force, which decides convergence, is always that of the
-    /// trial geometry (the updated Lagrangian scheme of METHOD.md §4), so the converged
+    /// trial geometry (the updated Lagrangian scheme of docs/theory.md §4), so the converged
     /// state is the same, while the iteration matrix stays fixed within an increment but
     /// for the contacts that change state. An iteration in which no contact changed then
     /// finds the matrix bit-identical and skips the factorization (only a solve), and one
@@ -214,7 +201,7 @@ impl Driver<'_> {
     /// (`SolverStats::factor_nnz`; an LU of the same matrix holds L and U with pivoting's
     /// extra fill, several times as many) or, for a backend that does not report them
     /// (iterative ones), from the matrix's stored entries × 8 (the ratio of the
-    /// Cholesky factor's entries to the matrix's on the walls of docs/performance.md).
+    /// Cholesky factor's entries to the matrix's on the walls of docs/performance.md, "Memory").
     /// The size of the model alone decides, never the machine's free memory, so that the
     /// results do not depend on the machine.
     pub(super) fn tangent_lu_too_large(&self) -> bool {
@@ -354,8 +341,8 @@ impl Driver<'_> {
         r: &[f64],
     ) -> Option<Vec<f64>> {
         if self.gmres_failed {
-            // it failed earlier in this increment: on the 10⁶-unknown wall of
-            // docs/performance.md it then failed at every later tangent step of the
+            // it failed earlier in this increment: on the 10⁶-unknown wall
+            // (docs/decisions/0011-tangent-lu-size-limit.md) it then failed at every later tangent step of the
             // increment (31 in a row, 30 iterations each)
             return None;
         }
@@ -449,7 +436,7 @@ impl Driver<'_> {
     /// root of the elimination tree, whose top separators (√n unknowns on a wall, dense)
     /// make a path cost ∝ n, while a nested-dissection factorization of a wall costs
     /// ∝ n^1.5: the break-even rank grows as √n. Measured (docs/performance.md, "The
-    /// low-rank correction in the static driver"): a correction at 0.45 of a
+    /// cost of a secant iteration"): a correction at 0.45 of a
     /// refactorization for a median 22 changed contacts on the rigid P2 wall (4,860
     /// unknowns), at 0.13–0.17 for 39 on the 10⁵-unknown wall. The size of the model alone
     /// decides (no timing), so that the results do not depend on the machine.

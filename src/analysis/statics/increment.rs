@@ -165,10 +165,9 @@ impl Problem for Increment<'_, '_> {
     }
 
     /// The secant iterations stagnate, which on large walls they do below the limit load
-    /// a little above the tolerance (docs/decisions, "Tangent steps after a stalled
-    /// secant window"): go on with tangent steps, which take the friction's dependence on
-    /// the normal force into account, before declaring the load beyond what the contacts
-    /// can hold.
+    /// a little above the tolerance: go on with tangent steps, which take the friction's
+    /// dependence on the normal force into account, before declaring the load beyond what
+    /// the contacts can hold (docs/decisions/0003-stall-window-and-tangent-fallback.md).
     fn escalate(&mut self, it: usize, stall: &Stall, a: &Assessment) -> bool {
         if self.d.settings.strategy != Strategy::Secant || self.tangent_only {
             return false;
@@ -215,7 +214,8 @@ impl Problem for Increment<'_, '_> {
         // with the states fixed the problem is linear but for the friction limit's
         // dependence on the normal force, which the secant matrix leaves out (the secant
         // iterations then contract by a constant factor, ~0.7 on the measured walls; the
-        // tangent step closes them in one or two)
+        // tangent step closes them in one or two:
+        // docs/decisions/0002-safeguarded-secant-steps.md)
         let tangent = strategy == Strategy::Newton
             || self.tangent_only
             || (strategy == Strategy::Secant

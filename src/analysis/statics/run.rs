@@ -7,7 +7,7 @@ use super::*;
 /// Fallout ([`Driver::fall_out`]): a failure mode that moves at most this many blocks, or
 /// [`FALLOUT_MAX_SHARE`] of the free blocks if that is more, is a local failure (key
 /// blocks falling out of a tunnel's roof: 6, then 6 behind them, of the 1,348 blocks of
-/// the growth bench's excavation at s = 0.55 m, docs/performance.md); a larger one is the
+/// the growth bench's excavation at s = 0.55 m, docs/decisions/0032-fallout-constants.md); a larger one is the
 /// structure's.
 pub(super) const FALLOUT_MAX_BLOCKS: usize = 8;
 /// See [`FALLOUT_MAX_BLOCKS`].

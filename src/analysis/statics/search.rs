@@ -1,7 +1,7 @@
 //! The step lengths of the static driver's corrections: the line search on the
 //! out-of-balance norm, the slope search where no step length lowers it, and the search
 //! along the free motion of blocks held only by slipping and open contacts
-//! (docs/theory.md, "Line search").
+//! (docs/theory.md §4, "Increments and iterations").
 
 use super::*;
 

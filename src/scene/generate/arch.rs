@@ -1,4 +1,4 @@
-//! `arch`: a voussoir arch on two piers (seed section 4.3; BENCHMARKS.md V5, V6).
+//! `arch`: a voussoir arch on two piers (seed section 4.3; docs/validation.md V5, V6).
 //!
 //! Coordinates: the arch is symmetric about x = 0, the intrados springings are at
 //! (∓span/2, pier_height); the piers stand on y = 0 with their inner faces flush with the

@@ -1,4 +1,4 @@
-//! `incline`: one block on an inclined plane (Hoek and Bray 1977; BENCHMARKS.md V1, V5).
+//! `incline`: one block on an inclined plane (Hoek and Bray 1977; docs/validation.md V1, V5).
 //!
 //! The fixed slope block has its top face from (0, 0) rising at α to
 //! (L cos α, L sin α) (a triangle; a trapezoid 0.1 L thick at the toe when α < 5°).

@@ -1,4 +1,4 @@
-//! `[[generate]]`: structures built from a few parameters (INTERFACE.md, extended).
+//! `[[generate]]`: structures built from a few parameters (docs/scene-reference.md, "[[generate]]").
 //!
 //! Every generator takes its own parameters (a TOML table without the common keys
 //! `type`, `name`, `material`, `base_material`, `kind`, `mesh_size`) and returns blocks.

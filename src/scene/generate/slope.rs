@@ -1,5 +1,5 @@
 //! `slope`: a toppling rock slope of columns on a stepped base (Goodman and Bray 1976;
-//! Hoek and Bray, Rock Slope Engineering; BENCHMARKS.md V7). The defaults build the
+//! Hoek and Bray, Rock Slope Engineering; docs/validation.md V7). The defaults build the
 //! worked example.
 //!
 //! Geometry. The toppling joints (the column faces) dip `joint_dip` = 60° into the slope,

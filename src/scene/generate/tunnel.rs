@@ -1,4 +1,4 @@
-//! `tunnel`: an opening in a jointed rock mass (BENCHMARKS.md V9, P4).
+//! `tunnel`: an opening in a jointed rock mass (docs/validation.md V9, P4).
 //!
 //! The domain [0, width] × [0, height] minus the opening is cut by the joint sets with
 //! `geo::BooleanOps` (intersection of each piece with the strips between successive

@@ -1,4 +1,4 @@
-//! `wall`: a running-bond masonry wall on a fixed base (BENCHMARKS.md P2, V8).
+//! `wall`: a running-bond masonry wall on a fixed base (docs/validation.md P2, V8).
 //!
 //! Lourenço's simplified micro-model: each block is the brick plus half a joint on every
 //! side, so a block is `brick_length + joint` long and `brick_height + joint` high and

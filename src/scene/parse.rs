@@ -251,6 +251,28 @@ fn index_of<'a>(
     })
 }
 
+/// The value of `key` (in `unit`), which the table whose header starts at `at` (`place`
+/// in errors) must give: the error when it is missing, else [`check_value`]'s.
+fn required(
+    src: &Src,
+    at: usize,
+    place: &str,
+    key: &str,
+    v: Option<f64>,
+    positive: bool,
+    unit: &str,
+) -> Result<f64> {
+    let v = v.ok_or_else(|| {
+        err_at(
+            src.line(at),
+            place,
+            format!("key '{key}' is missing"),
+            format!("add {key} = <value in {unit}>"),
+        )
+    })?;
+    check_value(src, at, place, key, v, positive, unit)
+}
+
 /// A warning about line `line` of the scene, after its file when it has one.
 fn warning(file: Option<&Path>, line: usize, what: std::fmt::Arguments) -> String {
     format!(

@@ -1,7 +1,7 @@
 //! `[[block]]`: blocks given by their polygons; and the checks of all the blocks of the
 //! scene, given, generated and imported.
 
-use super::materials::material_index;
+use super::materials::material_key;
 use super::{check_value, err_at, warning, Named, Src, MAX_BLOCKS};
 use crate::error::{Error, Result};
 use crate::geometry::overlapping_pairs;
@@ -39,15 +39,7 @@ pub(super) fn parse_blocks(
         let line = src.line(at);
         let name = named.name(src, at, i, b.name.as_deref())?.to_string();
         let place = format!("block '{name}'");
-        let mat = b.material.as_deref().ok_or_else(|| {
-            err_at(
-                line,
-                place.clone(),
-                "key 'material' is missing",
-                "add material = \"<name of a [[material]]>\"",
-            )
-        })?;
-        let material = material_index(materials, mat, src.key_line(at, "material"), &place)?;
+        let material = material_key(src, at, &place, materials, b.material.as_deref())?;
         let vertices = b.vertices.clone().ok_or_else(|| {
             err_at(
                 line,

@@ -1,7 +1,7 @@
 //! `[[generate]]`: blocks made by the generators of [`crate::scene::generate`].
 
 use super::blocks::{parse_kind, room_for};
-use super::materials::material_index;
+use super::materials::{material_index, material_key};
 use super::{check_value, err_at, Src};
 use crate::error::Result;
 use crate::scene::generate::{self, GenError};
@@ -54,15 +54,8 @@ pub(super) fn parse_generate(
             }
         };
         let prefix = take_str(&mut params, "name")?;
-        let mat = take_str(&mut params, "material")?.ok_or_else(|| {
-            err_at(
-                line,
-                place.clone(),
-                "key 'material' is missing",
-                "add material = \"<name of a [[material]]>\"",
-            )
-        })?;
-        let material = material_index(materials, &mat, src.key_line(at, "material"), &place)?;
+        let mat = take_str(&mut params, "material")?;
+        let material = material_key(src, at, &place, materials, mat.as_deref())?;
         let base_material = match take_str(&mut params, "base_material")? {
             None => material,
             Some(m) => material_index(materials, &m, src.key_line(at, "base_material"), &place)?,

@@ -1,6 +1,6 @@
 //! `[[joint]]`: the contact laws of the joints between blocks.
 
-use super::{check_value, err_at, Named, Src};
+use super::{check_value, err_at, required, Named, Src};
 use crate::error::Result;
 use crate::scene::{Block, Joint, JointCap, JointSoftening};
 use serde::Deserialize;
@@ -44,17 +44,8 @@ pub(super) fn parse_joints(src: &Src, raw: &[Spanned<RawJoint>]) -> Result<Vec<J
             .unique_name(src, at, i, j.name.as_deref())?
             .to_string();
         let place = format!("joint '{name}'");
-        let need = |key: &str, v: Option<f64>, unit: &str| -> Result<f64> {
-            let v = v.ok_or_else(|| {
-                err_at(
-                    src.line(at),
-                    place.clone(),
-                    format!("key '{key}' is missing"),
-                    format!("add {key} = <value in {unit}>"),
-                )
-            })?;
-            check_value(src, at, &place, key, v, true, unit)
-        };
+        let need =
+            |key: &str, v: Option<f64>, unit: &str| required(src, at, &place, key, v, true, unit);
         let normal_modulus = need("normal_modulus", j.normal_modulus, "Pa")?;
         let shear_modulus = need("shear_modulus", j.shear_modulus, "Pa")?;
         let band = need("band", j.band, "m")?;

@@ -1,6 +1,6 @@
 //! `[[material]]`: the elastic (Kelvin–Voigt) materials of the blocks.
 
-use super::{check_value, err_at, index_of, Named, Src};
+use super::{check_value, err_at, index_of, required, Named, Src};
 use crate::error::Result;
 use crate::scene::Material;
 use serde::Deserialize;
@@ -28,16 +28,8 @@ pub(super) fn parse_materials(src: &Src, raw: &[Spanned<RawMaterial>]) -> Result
             .unique_name(src, at, i, m.name.as_deref())?
             .to_string();
         let place = format!("material '{name}'");
-        let need = |key: &str, v: Option<f64>, positive: bool, unit: &str| -> Result<f64> {
-            let v = v.ok_or_else(|| {
-                err_at(
-                    src.line(at),
-                    place.clone(),
-                    format!("key '{key}' is missing"),
-                    format!("add {key} = <value in {unit}>"),
-                )
-            })?;
-            check_value(src, at, &place, key, v, positive, unit)
+        let need = |key: &str, v: Option<f64>, positive: bool, unit: &str| {
+            required(src, at, &place, key, v, positive, unit)
         };
         let lame_lambda = need("lame_lambda", m.lame_lambda, false, "Pa")?;
         let lame_mu = need("lame_mu", m.lame_mu, true, "Pa")?;
@@ -76,4 +68,24 @@ pub(super) fn material_index(
         line,
         place,
     )
+}
+
+/// The index of the material that key `material` of the table at `at` (`place` in
+/// errors) names: `name`, which the table must give.
+pub(super) fn material_key(
+    src: &Src,
+    at: usize,
+    place: &str,
+    materials: &[Material],
+    name: Option<&str>,
+) -> Result<usize> {
+    let name = name.ok_or_else(|| {
+        err_at(
+            src.line(at),
+            place,
+            "key 'material' is missing",
+            "add material = \"<name of a [[material]]>\"",
+        )
+    })?;
+    material_index(materials, name, src.key_line(at, "material"), place)
 }

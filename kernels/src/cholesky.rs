@@ -1,9 +1,10 @@
 //! The Cholesky core shared by faer's LLᵀ and LDLᵀ backends ([`crate::faer_backend`]) and
 //! by the backends built from it ([`crate::split`], [`crate::condensed`], the low-rank
 //! correction of [`crate::lowrank`]): the symbolic analysis kept per pattern, the numeric
-//! factorization with its pivot report, the solve, the flop counts, and the supernodal
-//! switch. A module of its own so that the low-rank correction, which reads the held
-//! factor, and the backend that holds a correction do not import each other.
+//! factorization with its pivot report, the solve, the flop counts, the supernodal switch,
+//! and the small conversions to faer that [`crate::faer_backend`]'s LU uses too.
+//! A module of its own so that the low-rank correction, which reads the held factor, and
+//! the backend that holds a correction do not import each other.
 
 use crate::backend::{same_bits, SolveError, SolverStats};
 use crate::csr::{CsrMatrix, CsrPattern};
@@ -35,10 +36,12 @@ pub(crate) fn col_ptr_u32(p: &CsrPattern) -> Result<Vec<u32>, SolveError> {
     Ok(p.row_ptr().iter().map(|&x| x as u32).collect())
 }
 
+/// A faer error as a [`SolveError`].
 pub(crate) fn faer_err(e: impl std::fmt::Debug) -> SolveError {
     SolveError::Other(format!("faer: {e:?}"))
 }
 
+/// Checks that a right-hand side has the matrix's order `n`.
 pub(crate) fn check_rhs(n: usize, rhs: &[f64]) -> Result<(), SolveError> {
     if rhs.len() != n {
         return Err(SolveError::Other(format!(

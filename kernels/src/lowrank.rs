@@ -52,9 +52,10 @@
 //!
 //! *Threads.* The results do not depend on the number of threads: the two substitutions
 //! of a solve run on independent subtrees of the supernodal elimination tree in parallel
-//! (`Split`, private), every entry receiving the same operations in the same order as in faer's
-//! sequential substitution, and the scan of ΔK runs in chunks of rows whose changes are
-//! read in order; the rest (W, C and its eigendecomposition) is sequential.
+//! (`Split`, in the private submodule `substitution`), every entry receiving the same
+//! operations in the same order as in faer's sequential substitution, and the scan of ΔK
+//! runs in chunks of rows whose changes are read in order; the rest (W, C and its
+//! eigendecomposition) is sequential.
 
 use crate::backend::SolveError;
 use crate::cholesky::{CholAnalysis, CholeskyCore};

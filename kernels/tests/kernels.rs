@@ -503,7 +503,7 @@ fn unsymmetric_values_with_lu() {
 
 /// The Cholesky backends take faer's supernodal factorization where the symbolic factor
 /// has more than `SUPERNODAL_FLOP_RATIO` (12) flops per entry (faer's measure: 1 + ours),
-/// below faer's own switch at 40 (kernels/src/faer_backend.rs; docs/performance.md,
+/// below faer's own switch at 40 (kernels/src/cholesky.rs; docs/performance.md,
 /// "Supernodal from a flop ratio of 12"); LLᵀ and LDLᵀ alike, and both give the dense
 /// solution.
 #[test]

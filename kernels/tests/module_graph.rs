@@ -231,7 +231,9 @@ fn modules_import_each_other_without_a_cycle() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let graph = module_graph(&src);
     assert!(
-        graph.get("faer_backend").is_some_and(|d| d.contains("backend")),
+        graph
+            .get("faer_backend")
+            .is_some_and(|d| d.contains("backend")),
         "the scan misses imports: {graph:?}"
     );
     if let Some(cycle) = find_cycle(&graph) {

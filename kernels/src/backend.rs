@@ -1,7 +1,8 @@
-//! The linear solver interface shared by every backend, and the run-time registry.
+//! The linear solver interface shared by every backend: the [`LinearBackend`] trait, its
+//! errors and counters, and the small helpers the implementations share. The backends
+//! depend on this module, never the reverse; building one by name is [`crate::registry`].
 
 use crate::csr::{CsrMatrix, CsrPattern};
-use crate::ordering::FillOrdering;
 use std::sync::Arc;
 
 /// Why a factorization or a solve failed. Indices are unknown numbers in the original
@@ -108,7 +109,7 @@ pub struct SolverStats {
 /// A sparse linear solver: symbolic analysis once per pattern, numeric factorization
 /// whenever the values change, any number of solves.
 pub trait LinearBackend: Send {
-    /// Name as accepted by [`backend_from_name`].
+    /// Name as accepted by [`backend_from_name`](crate::registry::backend_from_name).
     fn name(&self) -> &'static str;
     /// Symbolic phase (ordering, elimination structure). Cached by pattern id: a second call with the same pattern does nothing.
     fn analyze(&mut self, pattern: &Arc<CsrPattern>) -> Result<(), SolveError>;
@@ -225,47 +226,4 @@ pub(crate) fn check_values(a: &CsrMatrix) -> Result<(), SolveError> {
         ));
     }
     Ok(())
-}
-
-/// Names accepted by [`backend_from_name`].
-pub const BACKENDS: &[&str] = &[
-    "faer-cholesky",
-    "faer-cholesky-metis",
-    "faer-cholesky-split",
-    "faer-ldlt",
-    "faer-ldlt-metis",
-    "faer-lu",
-    "faer-condensed",
-    "faer-substructured",
-    "pcg",
-];
-
-/// Builds a backend from its name (one of [`BACKENDS`]) with default settings. The
-/// `-metis` variants order the unknowns by METIS nested dissection instead of AMD;
-/// `faer-substructured` is [`crate::substructure::FaerCholeskySubstructured`] with two
-/// subdomains; `faer-condensed` is [`crate::condensed::FaerCholeskyCondensed`] (the
-/// blocks' interiors condensed out, given [`LinearBackend::set_interiors`]).
-/// The error message lists the valid names.
-pub fn backend_from_name(name: &str) -> Result<Box<dyn LinearBackend>, String> {
-    match name {
-        "faer-cholesky" => Ok(Box::new(crate::faer_backend::FaerCholesky::new())),
-        "faer-cholesky-metis" => Ok(Box::new(
-            crate::faer_backend::FaerCholesky::new().with_ordering(FillOrdering::Metis),
-        )),
-        "faer-cholesky-split" => Ok(Box::new(crate::split::FaerCholeskySplit::new())),
-        "faer-ldlt" => Ok(Box::new(crate::faer_backend::FaerLdlt::new())),
-        "faer-ldlt-metis" => Ok(Box::new(
-            crate::faer_backend::FaerLdlt::new().with_ordering(FillOrdering::Metis),
-        )),
-        "faer-lu" => Ok(Box::new(crate::faer_backend::FaerLu::new())),
-        "faer-condensed" => Ok(Box::new(crate::condensed::FaerCholeskyCondensed::new())),
-        "faer-substructured" => Ok(Box::new(
-            crate::substructure::FaerCholeskySubstructured::new(),
-        )),
-        "pcg" => Ok(Box::new(crate::pcg::Pcg::new())),
-        _ => Err(format!(
-            "unknown linear backend '{name}'; valid names: {}",
-            BACKENDS.join(", ")
-        )),
-    }
 }

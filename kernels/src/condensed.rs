@@ -46,8 +46,9 @@
 //! block order, so the results are bit-identical for any number of threads.
 
 use crate::backend::{check_values, same_bits, LinearBackend, SolveError, SolverStats};
+use crate::cholesky::cholesky_flops;
 use crate::csr::{CsrMatrix, CsrPattern};
-use crate::faer_backend::{cholesky_flops, FaerCholesky};
+use crate::faer_backend::FaerCholesky;
 use crate::split::InteriorOrder;
 use crate::substructure::{Ctx, Leaf};
 use faer::Par;

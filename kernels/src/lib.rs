@@ -4,7 +4,8 @@
 //! * [`csr`]: the sparsity pattern ([`CsrPattern`], built once per topology) and matrices
 //!   holding values on it ([`CsrMatrix`]).
 //! * [`assembly`]: deterministic parallel assembly ([`AssemblyPlan`]).
-//! * [`backend`]: the [`LinearBackend`] trait and the registry [`backend_from_name`].
+//! * [`backend`]: the [`LinearBackend`] trait, its errors and counters.
+//! * [`registry`]: every built-in backend by name ([`backend_from_name`], [`BACKENDS`]).
 //! * [`faer_backend`]: sparse Cholesky LLᵀ, LDLᵀ and LU on faer.
 //! * [`lowrank`]: solves with a matrix changed on few unknowns through the held
 //!   Cholesky factor of the old one (Woodbury inside the factor).
@@ -23,6 +24,7 @@
 
 pub mod assembly;
 pub mod backend;
+mod cholesky;
 pub mod condensed;
 pub mod csr;
 pub mod faer_backend;
@@ -31,19 +33,18 @@ pub mod mm;
 pub mod ordering;
 mod partial;
 pub mod pcg;
+pub mod registry;
 pub mod split;
 pub mod substructure;
 
 pub use assembly::{unpack_symmetric, AssemblyPlan, Connectivity, Form, CONSTRAINED};
-pub use backend::{
-    backend_from_name, max_relative_difference, same_bits, LinearBackend, SolveError, SolverStats,
-    BACKENDS,
-};
+pub use backend::{max_relative_difference, same_bits, LinearBackend, SolveError, SolverStats};
 pub use condensed::{Decision, FaerCholeskyCondensed};
 pub use csr::{CsrMatrix, CsrPattern};
 pub use faer_backend::{FaerCholesky, FaerLdlt, FaerLu};
 pub use lowrank::{LowRankCorrection, LowRankStats};
 pub use ordering::{metis_partition, metis_partition_graph, FillOrdering};
 pub use pcg::{BlockNodes2d, CoarseCorrection, CoarseSpace, Pcg, Preconditioner};
+pub use registry::{backend_from_name, BACKENDS};
 pub use split::FaerCholeskySplit;
 pub use substructure::{FaerCholeskySubstructured, SubstructureStats};

@@ -359,8 +359,8 @@ pub(crate) fn col_mut(v: &mut [f64]) -> MatMut<'_, f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cholesky::CholeskyCore;
     use crate::csr::{CsrMatrix, CsrPattern};
-    use crate::faer_backend::CholeskyCore;
     use faer::linalg::solvers::Solve;
     use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
     use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;

@@ -21,9 +21,9 @@
 //! rayon threads.
 
 use crate::assembly::CONSTRAINED;
-use crate::backend::{LinearBackend, SolveError, SolverStats};
+use crate::backend::{same_bits, LinearBackend, SolveError, SolverStats};
 use crate::csr::{CsrMatrix, CsrPattern, ROW_CHUNK};
-use crate::faer_backend::{same_bits, FaerCholesky};
+use crate::faer_backend::FaerCholesky;
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;

@@ -24,9 +24,10 @@
 //! pivot inside a half is reported at its unknown; one in the separator's dense Schur
 //! complement at the first separator unknown, with `pivot` NaN.
 
-use crate::backend::{LinearBackend, SolveError, SolverStats};
+use crate::backend::{same_bits, LinearBackend, SolveError, SolverStats};
+use crate::cholesky::CholeskyCore;
 use crate::csr::{CsrMatrix, CsrPattern};
-use crate::faer_backend::{same_bits, CholeskyCore, FaerCholesky};
+use crate::faer_backend::FaerCholesky;
 use crate::ordering::{metis_separator, FillOrdering};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};

@@ -503,8 +503,8 @@ fn unsymmetric_values_with_lu() {
 
 /// The Cholesky backends take faer's supernodal factorization where the symbolic factor
 /// has more than `SUPERNODAL_FLOP_RATIO` (12) flops per entry (faer's measure: 1 + ours),
-/// below faer's own switch at 40 (kernels/src/faer_backend.rs; docs/decisions/
-/// 0015-supernodal-flop-ratio.md); LLᵀ and LDLᵀ alike, and both give the dense
+/// below faer's own switch at 40 (kernels/src/cholesky.rs;
+/// docs/decisions/0015-supernodal-flop-ratio.md); LLᵀ and LDLᵀ alike, and both give the dense
 /// solution.
 #[test]
 fn the_default_factorization_is_supernodal_from_a_flop_ratio_of_12() {

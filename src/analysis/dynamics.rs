@@ -57,7 +57,7 @@ use super::config::{secant_local, tangent_local, Committed, Inputs, Trial};
 use super::contact_search;
 use super::statics::OpenFlips;
 use super::{fit_motion, Outcome, Stats, Status};
-use crate::assembly::{loads, mass, LocalStiffness, System};
+use crate::assembly::{loads, mass, LocalStiffness, Ranks, System};
 use crate::geometry::polygon::Point;
 use crate::material::{block_elastic, ContactLaw, ContactSprings, ContactState, MohrCoulomb};
 use crate::mesh::{BlockDofs, Mesh};
@@ -421,6 +421,8 @@ impl Energy {
 pub struct Dynamics<'a> {
     scene: &'a Scene,
     mesh0: &'a Mesh,
+    /// This process's rows in a distributed run ([`System::distributed`]).
+    ranks: Option<&'a Ranks>,
     pub settings: Settings,
     system: System,
     law: MohrCoulomb,
@@ -627,10 +629,11 @@ impl<'a> Dynamics<'a> {
     pub fn new(
         scene: &'a Scene,
         mesh: &'a Mesh,
+        ranks: Option<&'a Ranks>,
         backend: &'a mut dyn LinearBackend,
     ) -> Result<Dynamics<'a>> {
         let settings = Settings::from_scene(scene)?;
-        let system = System::for_dynamics(scene, mesh);
+        let system = System::for_dynamics(scene, mesh).distributed(ranks);
         // a failed factorization only says "singular" here: no LDLᵀ for its pivot's value
         backend.set_failed_pivot_value(false);
         let joint = scene.joints.get(scene.contacts.joint);
@@ -677,6 +680,7 @@ impl<'a> Dynamics<'a> {
         Ok(Dynamics {
             scene,
             mesh0: mesh,
+            ranks,
             settings,
             diag: pattern.diagonal_positions(),
             kbuf: CsrMatrix::zeros(pattern),
@@ -841,7 +845,15 @@ impl<'a> Dynamics<'a> {
         for b in &mut scene.blocks {
             b.prescribed = None;
         }
-        let Ok(out) = super::statics::run(&scene, initial, &mut *self.backend) else {
+        let silent = &mut super::progress::Silent;
+        let run = super::statics::run_with_progress(
+            &scene,
+            initial,
+            self.ranks,
+            &mut *self.backend,
+            silent,
+        );
+        let Ok(out) = run else {
             return;
         };
         self.stats.static_start_iterations = out.stats.iterations;
@@ -1000,7 +1012,7 @@ impl<'a> Dynamics<'a> {
 
     /// The system, its pattern and the matrix buffers for the contact set of `cur`.
     fn rebuild_system(&mut self) {
-        self.system = System::for_dynamics(self.scene, &self.cur);
+        self.system = System::for_dynamics(self.scene, &self.cur).distributed(self.ranks);
         let pattern = self.system.plan.pattern().clone();
         self.diag = pattern.diagonal_positions();
         self.kbuf = CsrMatrix::zeros(pattern.clone());
@@ -2229,10 +2241,11 @@ pub fn step_count(settings: &Settings) -> usize {
 pub fn run(
     scene: &Scene,
     mesh: &Mesh,
+    ranks: Option<&Ranks>,
     backend: &mut dyn LinearBackend,
     monitor: &mut dyn Monitor,
 ) -> Result<Outcome> {
-    run_from(scene, mesh, backend, monitor, None)
+    run_from(scene, mesh, ranks, backend, monitor, None)
 }
 
 /// [`run`], or its continuation from a checkpoint `from` of the same scene: the rows and
@@ -2241,12 +2254,13 @@ pub fn run(
 pub fn run_from(
     scene: &Scene,
     mesh: &Mesh,
+    ranks: Option<&Ranks>,
     backend: &mut dyn LinearBackend,
     monitor: &mut dyn Monitor,
     from: Option<Checkpoint>,
 ) -> Result<Outcome> {
     let start = Instant::now();
-    let mut d = Dynamics::new(scene, mesh, backend)?;
+    let mut d = Dynamics::new(scene, mesh, ranks, backend)?;
     // counters of the part of the run before the checkpoint
     let mut before = Stats::default();
     let resumed = from.is_some();

@@ -11,7 +11,7 @@ pub mod progress;
 pub mod statics;
 pub mod support;
 
-use crate::assembly::{cst_b, loads};
+use crate::assembly::{cst_b, loads, Ranks};
 use crate::material::{block_elastic, ContactLaw, ContactSprings, ContactState, ElasticBand};
 use crate::mesh::Mesh;
 use crate::scene::{AnalysisType, Scene};
@@ -185,6 +185,7 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
     run_with(
         scene,
         mesh,
+        None,
         backend,
         &mut progress::Silent,
         &mut dynamics::NoMonitor,
@@ -193,10 +194,12 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
 
 /// Run the scene's analysis, telling `progress` how a static or capacity analysis goes
 /// (phases, iterations, converged increments); a dynamic one streams its history and
-/// frames to `monitor`. The results are those of [`run`].
+/// frames to `monitor`. `ranks`: this process's rows in a distributed run (from
+/// [`crate::solve::configure_run`]), `None` serial. The results are those of [`run`].
 pub fn run_with(
     scene: &Scene,
     mesh: &Mesh,
+    ranks: Option<&Ranks>,
     backend: &mut dyn LinearBackend,
     progress: &mut dyn progress::Progress,
     monitor: &mut dyn dynamics::Monitor,
@@ -262,11 +265,11 @@ pub fn run_with(
     }
     let mut out = match scene.analysis.kind {
         AnalysisType::Static | AnalysisType::Capacity => {
-            statics::run_with_progress(scene, mesh, backend, progress)
+            statics::run_with_progress(scene, mesh, ranks, backend, progress)
         }
-        AnalysisType::Dynamic => dynamics::run(scene, mesh, backend, monitor),
+        AnalysisType::Dynamic => dynamics::run(scene, mesh, ranks, backend, monitor),
     }?;
-    record_resources(&mut out, mesh, backend);
+    record_resources(&mut out, ranks, backend);
     Ok(out)
 }
 
@@ -274,18 +277,19 @@ pub fn run_with(
 pub fn resume_with(
     scene: &Scene,
     mesh: &Mesh,
+    ranks: Option<&Ranks>,
     backend: &mut dyn LinearBackend,
     monitor: &mut dyn dynamics::Monitor,
     from: checkpoint::Checkpoint,
 ) -> Result<Outcome> {
-    let mut out = dynamics::run_from(scene, mesh, backend, monitor, Some(from))?;
-    record_resources(&mut out, mesh, backend);
+    let mut out = dynamics::run_from(scene, mesh, ranks, backend, monitor, Some(from))?;
+    record_resources(&mut out, ranks, backend);
     Ok(out)
 }
 
 /// The factor size and the peak memory of the process, into the outcome's stats.
-fn record_resources(out: &mut Outcome, mesh: &Mesh, backend: &dyn LinearBackend) {
-    out.stats.processes = mesh.ranks.as_ref().map_or(1, |r| r.size as usize);
+fn record_resources(out: &mut Outcome, ranks: Option<&Ranks>, backend: &dyn LinearBackend) {
+    out.stats.processes = ranks.map_or(1, |r| r.size as usize);
     out.stats.factor_nnz = backend.stats().factor_nnz;
     out.stats.peak_memory_mb = crate::resources::peak_resident_bytes().map(|b| b as f64 / 1e6);
 }

@@ -10,7 +10,7 @@ use super::config::{secant_local, tangent_local, Committed, Inputs, Trial};
 use super::mechanism::{classify, Mechanism};
 use super::progress::{Increment, Progress};
 use super::{Outcome, Stats, Status};
-use crate::assembly::{loads, LocalStiffness, System};
+use crate::assembly::{loads, LocalStiffness, Ranks, System};
 use crate::geometry::polygon::Point;
 use crate::material::{ContactLaw, ContactState, JointLaw, PerContact};
 use crate::mesh::Mesh;
@@ -573,10 +573,11 @@ impl<'a> Driver<'a> {
     pub fn new(
         scene: &'a Scene,
         mesh: &Mesh,
+        ranks: Option<&Ranks>,
         backend: &'a mut dyn LinearBackend,
     ) -> Result<Driver<'a>> {
         let settings = Settings::from_scene(scene)?;
-        let system = System::new(scene, mesh);
+        let system = System::new(scene, mesh).distributed(ranks);
         // a failed factorization only says "singular" here: no LDLᵀ for its pivot's value
         backend.set_failed_pivot_value(false);
         let law = PerContact::of_scene(scene, mesh);
@@ -2298,18 +2299,20 @@ fn describe(why: &IncrementFailure) -> String {
 
 /// Run a static or capacity analysis.
 pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Result<Outcome> {
-    run_with_progress(scene, mesh, backend, &mut super::progress::Silent)
+    run_with_progress(scene, mesh, None, backend, &mut super::progress::Silent)
 }
 
-/// [`run`], reporting phases, iterations and converged increments to `progress`.
+/// [`run`], reporting phases, iterations and converged increments to `progress`;
+/// `ranks`: this process's rows in a distributed run ([`System::distributed`]).
 pub fn run_with_progress<'a>(
     scene: &'a Scene,
     mesh: &Mesh,
+    ranks: Option<&Ranks>,
     backend: &'a mut dyn LinearBackend,
     progress: &'a mut dyn Progress,
 ) -> Result<Outcome> {
     let start = Instant::now();
-    let mut d = Driver::new(scene, mesh, backend)?;
+    let mut d = Driver::new(scene, mesh, ranks, backend)?;
     d.progress = Some(progress);
     let steps = scene.analysis.load_steps;
     // increments of the gravity phase (`gravity_steps`, default `load_steps`): gravity on

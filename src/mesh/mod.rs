@@ -105,12 +105,6 @@ pub struct Mesh {
     pub segments: Vec<JointSegment>,
     pub contacts: Vec<Contact>,
     pub n_dofs: usize,
-    /// In a distributed run (`mpirun`), the process that owns each unknown's row and this
-    /// process's rank: the assembly evaluates only the elements of this process's rows and
-    /// exchanges the rest ([`crate::assembly::Ranks`]). `None` (serial) unless set by
-    /// [`crate::solve::configure_run`]; not saved.
-    #[serde(skip)]
-    pub ranks: Option<std::sync::Arc<crate::assembly::Ranks>>,
 }
 
 /// The unknowns a node's displacement depends on: `u_node = G · u[dofs]` with
@@ -321,7 +315,6 @@ pub fn build(scene: &Scene) -> Mesh {
         segments: Vec::new(),
         contacts: Vec::new(),
         n_dofs: 0,
-        ranks: None,
     };
     // boundary positions (edge, distance along the edge) → node id, per block
     let mut boundary_keys: Vec<Vec<(usize, f64)>> = Vec::with_capacity(polys.len());

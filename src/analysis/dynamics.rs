@@ -48,19 +48,18 @@
 //!
 //! Contacts are first those found in the initial geometry ([`Mesh::contacts`]). After
 //! each converged step the driver looks for new ones and drops far-separated ones
-//! (`Dynamics::update_contacts`, [`super::contact_search`]); only when the set changed
+//! (`Dynamics::update_contacts`, [`crate::mesh::contacts`]); only when the set changed
 //! does it rebuild [`System`], the pattern and the buffers, and with them the symbolic
 //! factorization at the next solve (`contact_topologies` in the summary).
 
 use super::checkpoint::Checkpoint;
 use super::config::{secant_local, tangent_local, Committed, Inputs, Trial};
-use super::contact_search;
 use super::statics::OpenFlips;
 use super::{fit_motion, Outcome, Stats, Status};
 use crate::assembly::{loads, mass, LocalStiffness, Ranks, System};
 use crate::geometry::polygon::Point;
 use crate::material::{block_elastic, ContactLaw, ContactSprings, ContactState, MohrCoulomb};
-use crate::mesh::{BlockDofs, Mesh};
+use crate::mesh::{contacts, BlockDofs, Mesh};
 use crate::scene::ground_motion::{self, Frame};
 use crate::scene::Scene;
 use crate::solve::LinearBackend;
@@ -914,7 +913,7 @@ impl<'a> Dynamics<'a> {
     }
 
     /// Look for new contacts and drop far-separated ones in the current configuration
-    /// ([`contact_search`]); rebuild the system (pattern, and with it the symbolic
+    /// ([`contacts`]); rebuild the system (pattern, and with it the symbolic
     /// factorization at the next solve) only when the set changed. The committed forces
     /// and states of the contacts kept are carried over; a new contact starts with the
     /// band's force at its gap, Fₙ = kₙ × gap: open with its opening remembered (as in
@@ -929,7 +928,9 @@ impl<'a> Dynamics<'a> {
             .collect();
         let vmax = vel.iter().fold(0.0f64, |m, v| m.max(v[0].hypot(v[1])));
         let reach = band + 2.0 * vmax * self.settings.dt;
-        let keep = contact_search::kept(&self.cur, &self.committed.state, band, reach);
+        let state = &self.committed.state;
+        let open: Vec<bool> = state.iter().map(|s| *s == ContactState::Open).collect();
+        let keep = contacts::kept(&self.cur, &open, band, reach);
         let dropped = keep.iter().filter(|k| !**k).count();
         if dropped > 0 {
             let mut it = keep.iter();
@@ -939,7 +940,7 @@ impl<'a> Dynamics<'a> {
             let mut it = keep.iter();
             self.committed.state.retain(|_| *it.next().unwrap());
         }
-        let found = contact_search::search(&self.cur, &vel, band, reach);
+        let found = contacts::search(&self.cur, &vel, band, reach);
         let added = found.len();
         for f in found {
             if super::tracing() {
@@ -983,7 +984,7 @@ impl<'a> Dynamics<'a> {
             .zip(&self.committed.state)
             .map(|(c, s)| match c.along {
                 Some(_) if *s == ContactState::Open => {
-                    contact_search::current_length(&self.cur, c, band, reach)
+                    contacts::current_length(&self.cur, c, band, reach)
                 }
                 _ => c.length,
             })

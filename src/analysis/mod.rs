@@ -3,13 +3,16 @@
 
 pub mod checkpoint;
 pub mod config;
-pub mod contact_search;
 pub mod curve;
 pub mod dynamics;
 pub mod mechanism;
 pub mod progress;
 pub mod statics;
 pub mod support;
+
+/// The search for new contacts during a run, now with the contacts found along the
+/// joints in [`crate::mesh::contacts`]; kept under its former name.
+pub use crate::mesh::contacts as contact_search;
 
 use crate::assembly::{cst_b, loads, Ranks};
 use crate::material::{block_elastic, ContactLaw, ContactSprings, ContactState, ElasticBand};
@@ -45,7 +48,8 @@ pub struct Stats {
     pub factorizations: usize,
     pub symbolic_factorizations: usize,
     /// Distinct contact sets a dynamic run went through (1 + the changes made by the
-    /// search for new contacts, [`contact_search`]); each needs one symbolic analysis.
+    /// search for new contacts, [`crate::mesh::contacts`]); each needs one symbolic
+    /// analysis.
     pub contact_topologies: usize,
     /// Corrections solved with an earlier factorization as preconditioner instead of a
     /// refactorization: secant ones (few contacts changed state) by conjugate gradients,

@@ -346,6 +346,7 @@ fn progress_reports_do_not_change_the_results() {
     let out = dfem::analysis::run_with(
         &sc,
         &m,
+        None,
         backend.as_mut(),
         &mut rec,
         &mut dfem::analysis::dynamics::NoMonitor,

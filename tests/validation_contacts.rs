@@ -139,7 +139,7 @@ vertices = [[-0.5, -0.5], [2.5, -0.5], [2.5, 0.0], [-0.5, 0.0]]
     dfem::mesh::build(&common::scene(&text))
 }
 
-/// The dynamic driver's search for new contacts (`analysis::contact_search::search`)
+/// The dynamic driver's search for new contacts (`mesh::contacts::search`)
 /// finds none where joints cross: in a stack-bond 2 × 2 group of blocks, the blocks
 /// diagonal to each other touch only at the crossing, where their neighbours' contacts
 /// already hold them apart (a corner-to-corner contact there has no side along the
@@ -156,7 +156,7 @@ fn no_new_contact_between_blocks_that_meet_only_where_joints_cross() {
         [1.0, 1.0, 2.0, 2.0],
     ]);
     let still = vec![[0.0; 2]; m.nodes.len()];
-    let found = dfem::analysis::contact_search::search(&m, &still, 0.01, 0.01);
+    let found = dfem::mesh::contacts::search(&m, &still, 0.01, 0.01);
     let pairs: Vec<(u32, u32)> = found
         .iter()
         .map(|f| (f.contact.block_l, f.contact.block_m))
@@ -182,7 +182,7 @@ fn a_block_landing_square_on_another_is_found_at_both_corners() {
             }
         })
         .collect();
-    let found = dfem::analysis::contact_search::search(&m, &vel, 0.01, 0.01 + 2.0 * 0.01);
+    let found = dfem::mesh::contacts::search(&m, &vel, 0.01, 0.01 + 2.0 * 0.01);
     let between: Vec<_> = found
         .iter()
         .filter(|f| {

@@ -48,19 +48,18 @@
 //!
 //! Contacts are first those found in the initial geometry ([`Mesh::contacts`]). After
 //! each converged step the driver looks for new ones and drops far-separated ones
-//! (`Dynamics::update_contacts`, [`super::contact_search`]); only when the set changed
+//! (`Dynamics::update_contacts`, [`crate::mesh::contacts`]); only when the set changed
 //! does it rebuild [`System`], the pattern and the buffers, and with them the symbolic
 //! factorization at the next solve (`contact_topologies` in the summary).
 
 use super::checkpoint::Checkpoint;
 use super::config::{secant_local, tangent_local, Committed, Inputs, Trial};
-use super::contact_search;
 use super::solver::{self, IterationControls, OpenFlips};
 use super::{fit_motion, Outcome, Stats, Status};
-use crate::assembly::{loads, mass, LocalStiffness, System};
+use crate::assembly::{loads, mass, LocalStiffness, Ranks, System};
 use crate::geometry::polygon::Point;
 use crate::material::{block_elastic, ContactLaw, ContactSprings, ContactState, MohrCoulomb};
-use crate::mesh::{BlockDofs, Mesh};
+use crate::mesh::{contacts, BlockDofs, Mesh};
 use crate::scene::ground_motion;
 use crate::scene::{AnalysisSettings, Scene, StaticSettings};
 use crate::solve::LinearBackend;
@@ -215,6 +214,8 @@ impl Energy {
 pub struct Dynamics<'a> {
     scene: &'a Scene,
     mesh0: &'a Mesh,
+    /// This process's rows in a distributed run ([`System::distributed`]).
+    ranks: Option<&'a Ranks>,
     pub settings: Settings,
     system: System,
     law: MohrCoulomb,
@@ -421,10 +422,11 @@ impl<'a> Dynamics<'a> {
     pub fn new(
         scene: &'a Scene,
         mesh: &'a Mesh,
+        ranks: Option<&'a Ranks>,
         backend: &'a mut dyn LinearBackend,
     ) -> Result<Dynamics<'a>> {
         let settings = scene.analysis.settings.dynamics()?.clone();
-        let system = System::for_dynamics(scene, mesh);
+        let system = System::for_dynamics(scene, mesh).distributed(ranks);
         // a failed factorization only says "singular" here: no LDLᵀ for its pivot's value
         backend.set_failed_pivot_value(false);
         let joint = scene.joints.get(scene.contacts.joint);
@@ -471,6 +473,7 @@ impl<'a> Dynamics<'a> {
         Ok(Dynamics {
             scene,
             mesh0: mesh,
+            ranks,
             settings,
             diag: pattern.diagonal_positions(),
             kbuf: CsrMatrix::zeros(pattern),
@@ -638,7 +641,15 @@ impl<'a> Dynamics<'a> {
         for b in &mut scene.blocks {
             b.prescribed = None;
         }
-        let Ok(out) = super::statics::run(&scene, initial, &mut *self.backend) else {
+        let silent = &mut super::progress::Silent;
+        let run = super::statics::run_with_progress(
+            &scene,
+            initial,
+            self.ranks,
+            &mut *self.backend,
+            silent,
+        );
+        let Ok(out) = run else {
             return;
         };
         self.stats.static_start_iterations = out.stats.iterations;
@@ -699,7 +710,7 @@ impl<'a> Dynamics<'a> {
     }
 
     /// Look for new contacts and drop far-separated ones in the current configuration
-    /// ([`contact_search`]); rebuild the system (pattern, and with it the symbolic
+    /// ([`contacts`]); rebuild the system (pattern, and with it the symbolic
     /// factorization at the next solve) only when the set changed. The committed forces
     /// and states of the contacts kept are carried over; a new contact starts with the
     /// band's force at its gap, Fₙ = kₙ × gap: open with its opening remembered (as in
@@ -714,7 +725,9 @@ impl<'a> Dynamics<'a> {
             .collect();
         let vmax = vel.iter().fold(0.0f64, |m, v| m.max(v[0].hypot(v[1])));
         let reach = band + 2.0 * vmax * self.settings.dt;
-        let keep = contact_search::kept(&self.cur, &self.committed.state, band, reach);
+        let state = &self.committed.state;
+        let open: Vec<bool> = state.iter().map(|s| *s == ContactState::Open).collect();
+        let keep = contacts::kept(&self.cur, &open, band, reach);
         let dropped = keep.iter().filter(|k| !**k).count();
         if dropped > 0 {
             let mut it = keep.iter();
@@ -724,7 +737,7 @@ impl<'a> Dynamics<'a> {
             let mut it = keep.iter();
             self.committed.state.retain(|_| *it.next().unwrap());
         }
-        let found = contact_search::search(&self.cur, &vel, band, reach);
+        let found = contacts::search(&self.cur, &vel, band, reach);
         let added = found.len();
         for f in found {
             if super::tracing() {
@@ -768,7 +781,7 @@ impl<'a> Dynamics<'a> {
             .zip(&self.committed.state)
             .map(|(c, s)| match c.along {
                 Some(_) if *s == ContactState::Open => {
-                    contact_search::current_length(&self.cur, c, band, reach)
+                    contacts::current_length(&self.cur, c, band, reach)
                 }
                 _ => c.length,
             })
@@ -797,7 +810,7 @@ impl<'a> Dynamics<'a> {
 
     /// The system, its pattern and the matrix buffers for the contact set of `cur`.
     fn rebuild_system(&mut self) {
-        self.system = System::for_dynamics(self.scene, &self.cur);
+        self.system = System::for_dynamics(self.scene, &self.cur).distributed(self.ranks);
         let pattern = self.system.plan.pattern().clone();
         self.diag = pattern.diagonal_positions();
         self.kbuf = CsrMatrix::zeros(pattern.clone());

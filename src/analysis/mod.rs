@@ -3,7 +3,6 @@
 
 pub mod checkpoint;
 pub mod config;
-pub mod contact_search;
 pub mod curve;
 pub mod dynamics;
 pub mod mechanism;
@@ -12,7 +11,11 @@ pub mod solver;
 pub mod statics;
 pub mod support;
 
-use crate::assembly::{cst_b, loads};
+/// The search for new contacts during a run, now with the contacts found along the
+/// joints in [`crate::mesh::contacts`]; kept under its former name.
+pub use crate::mesh::contacts as contact_search;
+
+use crate::assembly::{cst_b, loads, Ranks};
 use crate::material::{block_elastic, ContactLaw, ContactSprings, ContactState, ElasticBand};
 use crate::mesh::Mesh;
 use crate::scene::{AnalysisType, Scene};
@@ -46,7 +49,8 @@ pub struct Stats {
     pub factorizations: usize,
     pub symbolic_factorizations: usize,
     /// Distinct contact sets a dynamic run went through (1 + the changes made by the
-    /// search for new contacts, [`contact_search`]); each needs one symbolic analysis.
+    /// search for new contacts, [`crate::mesh::contacts`]); each needs one symbolic
+    /// analysis.
     pub contact_topologies: usize,
     /// Corrections solved with an earlier factorization as preconditioner instead of a
     /// refactorization: secant ones (few contacts changed state) by conjugate gradients,
@@ -186,6 +190,7 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
     run_with(
         scene,
         mesh,
+        None,
         backend,
         &mut progress::Silent,
         &mut dynamics::NoMonitor,
@@ -194,10 +199,12 @@ pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Resul
 
 /// Run the scene's analysis, telling `progress` how a static or capacity analysis goes
 /// (phases, iterations, converged increments); a dynamic one streams its history and
-/// frames to `monitor`. The results are those of [`run`].
+/// frames to `monitor`. `ranks`: this process's rows in a distributed run (from
+/// [`crate::solve::configure_run`]), `None` serial. The results are those of [`run`].
 pub fn run_with(
     scene: &Scene,
     mesh: &Mesh,
+    ranks: Option<&Ranks>,
     backend: &mut dyn LinearBackend,
     progress: &mut dyn progress::Progress,
     monitor: &mut dyn dynamics::Monitor,
@@ -263,11 +270,11 @@ pub fn run_with(
     }
     let mut out = match scene.analysis.kind {
         AnalysisType::Static | AnalysisType::Capacity => {
-            statics::run_with_progress(scene, mesh, backend, progress)
+            statics::run_with_progress(scene, mesh, ranks, backend, progress)
         }
-        AnalysisType::Dynamic => dynamics::run(scene, mesh, backend, monitor),
+        AnalysisType::Dynamic => dynamics::run(scene, mesh, ranks, backend, monitor),
     }?;
-    record_resources(&mut out, mesh, backend);
+    record_resources(&mut out, ranks, backend);
     Ok(out)
 }
 
@@ -275,18 +282,19 @@ pub fn run_with(
 pub fn resume_with(
     scene: &Scene,
     mesh: &Mesh,
+    ranks: Option<&Ranks>,
     backend: &mut dyn LinearBackend,
     monitor: &mut dyn dynamics::Monitor,
     from: checkpoint::Checkpoint,
 ) -> Result<Outcome> {
-    let mut out = dynamics::run_from(scene, mesh, backend, monitor, Some(from))?;
-    record_resources(&mut out, mesh, backend);
+    let mut out = dynamics::run_from(scene, mesh, ranks, backend, monitor, Some(from))?;
+    record_resources(&mut out, ranks, backend);
     Ok(out)
 }
 
 /// The factor size and the peak memory of the process, into the outcome's stats.
-fn record_resources(out: &mut Outcome, mesh: &Mesh, backend: &dyn LinearBackend) {
-    out.stats.processes = mesh.ranks.as_ref().map_or(1, |r| r.size as usize);
+fn record_resources(out: &mut Outcome, ranks: Option<&Ranks>, backend: &dyn LinearBackend) {
+    out.stats.processes = ranks.map_or(1, |r| r.size as usize);
     out.stats.factor_nnz = backend.stats().factor_nnz;
     out.stats.peak_memory_mb = crate::resources::peak_resident_bytes().map(|b| b as f64 / 1e6);
 }

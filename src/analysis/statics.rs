@@ -11,7 +11,7 @@ use super::mechanism::{classify, Mechanism};
 use super::progress::{Increment, Progress};
 use super::solver::{self, IterationControls, OpenFlips};
 use super::{Outcome, Stats, Status};
-use crate::assembly::{loads, LocalStiffness, System};
+use crate::assembly::{loads, LocalStiffness, Ranks, System};
 use crate::geometry::polygon::Point;
 use crate::material::{ContactLaw, ContactState, JointLaw, PerContact};
 use crate::mesh::Mesh;
@@ -284,10 +284,11 @@ impl<'a> Driver<'a> {
     pub fn new(
         scene: &'a Scene,
         mesh: &Mesh,
+        ranks: Option<&Ranks>,
         backend: &'a mut dyn LinearBackend,
     ) -> Result<Driver<'a>> {
         let settings = scene.analysis.settings.statics()?.clone();
-        let system = System::new(scene, mesh);
+        let system = System::new(scene, mesh).distributed(ranks);
         // a failed factorization only says "singular" here: no LDLᵀ for its pivot's value
         backend.set_failed_pivot_value(false);
         let law = PerContact::of_scene(scene, mesh);
@@ -710,5 +711,5 @@ impl<'a> Driver<'a> {
 
 /// Run a static or capacity analysis.
 pub fn run(scene: &Scene, mesh: &Mesh, backend: &mut dyn LinearBackend) -> Result<Outcome> {
-    run_with_progress(scene, mesh, backend, &mut super::progress::Silent)
+    run_with_progress(scene, mesh, None, backend, &mut super::progress::Silent)
 }

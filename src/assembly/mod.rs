@@ -53,8 +53,8 @@ pub struct System {
     /// The triangles' part of K on the last geometry seen twice, and the contacts'
     /// gradients on the last geometry.
     blocks: Mutex<BlockCache>,
-    /// In a distributed run ([`Mesh::ranks`]): the elements this process evaluates and the
-    /// exchange of the rows; `None` in a serial run.
+    /// In a distributed run ([`System::distributed`]): the elements this process evaluates
+    /// and the exchange of the rows; `None` in a serial run.
     rows: Option<RowExchange>,
 }
 
@@ -173,10 +173,6 @@ impl System {
             .map(|&b| scene.blocks[b as usize].material as u32)
             .collect();
         let plan = AssemblyPlan::with_groups(mesh.n_dofs, &conn, &group_ends);
-        let rows = mesh
-            .ranks
-            .as_deref()
-            .and_then(|r| RowExchange::new(r, &conn, plan.pattern()));
         System {
             plan,
             n_triangles: mesh.triangles.len(),
@@ -186,8 +182,18 @@ impl System {
             dv,
             contact_ptr,
             blocks: Mutex::new(BlockCache::default()),
-            rows,
+            rows: None,
         }
+    }
+
+    /// This system assembled by the processes of a distributed run together: each
+    /// evaluates only the elements of its own rows (`ranks`, made by
+    /// [`crate::solve::configure_run`]) and the rows are then exchanged. `None`, or ranks
+    /// that do not fit the system (one process, another number of unknowns): serial.
+    pub fn distributed(mut self, ranks: Option<&Ranks>) -> System {
+        self.rows =
+            ranks.and_then(|r| RowExchange::new(r, self.plan.connectivity(), self.plan.pattern()));
+        self
     }
 
     /// The elements this process evaluates (`None`: all of them).
@@ -811,17 +817,23 @@ mod tests {
         let mut k = CsrMatrix::zeros(serial.plan.pattern().clone());
         serial.stiffness_full_into(&mesh, &local, &mut k);
         let size = 3u32;
-        let part = crate::solve::block_partition(&mesh, size as usize).unwrap();
+        // whole blocks to each rank, a third of the blocks (courses of the wall) each
+        let mut part = vec![0u32; mesh.n_dofs];
+        let n_blocks = mesh.blocks.len();
+        for b in 0..n_blocks {
+            for i in mesh.block_unknowns(b) {
+                part[i] = (b * size as usize / n_blocks) as u32;
+            }
+        }
         let mut all = Vec::new();
         let mut last = None;
         for rank in 0..size {
-            let mut m = mesh.clone();
-            m.ranks = Some(std::sync::Arc::new(Ranks {
+            let ranks = Ranks {
                 part: part.clone(),
                 rank,
                 size,
-            }));
-            let sys = System::new(&scene, &m);
+            };
+            let sys = System::new(&scene, &mesh).distributed(Some(&ranks));
             let rows = sys.rows.as_ref().expect("distributed");
             let evaluated = rows.active().iter().filter(|&&a| a).count();
             // a third of the elements plus the contacts along the cuts
@@ -832,8 +844,8 @@ mod tests {
             );
             let mut own = CsrMatrix::zeros(sys.plan.pattern().clone());
             own.values.fill(f64::NAN);
-            let g = sys.contact_gradients(&m);
-            sys.assemble_own(&m, &sys.dt, &g, &local, &mut own);
+            let g = sys.contact_gradients(&mesh);
+            sys.assemble_own(&mesh, &sys.dt, &g, &local, &mut own);
             all.extend(rows.pack(&own));
             last = Some((sys, own));
         }

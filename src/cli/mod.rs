@@ -327,14 +327,16 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                 }
             }
             prog.stage("meshing");
-            let mut m = mesh::build(&sc);
+            let m = mesh::build(&sc);
             check_memory(&sc, &m, memory_limit)?;
-            solve::configure_run(backend.as_mut(), &mut m)
+            let ranks = solve::configure_run(backend.as_mut(), &m)
                 .map_err(|e| Error::new(e.to_string()).place("option --solver"))?;
+            let ranks = ranks.as_ref();
             if rank != 0 {
                 analysis::run_with(
                     &sc,
                     &m,
+                    ranks,
                     backend.as_mut(),
                     &mut prog,
                     &mut analysis::dynamics::NoMonitor,
@@ -356,7 +358,7 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                     Some(s) => {
                         let mut w = output::StreamWriter::resuming(&out, &sc, &m, &s.state)?
                             .stop_on(stop);
-                        analysis::resume_with(&sc, &m, backend.as_mut(), &mut w, s.state).map(
+                        analysis::resume_with(&sc, &m, ranks, backend.as_mut(), &mut w, s.state).map(
                             |mut o| {
                                 w.complete(&mut o);
                                 o
@@ -365,13 +367,14 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                     }
                     None => {
                         let mut w = output::StreamWriter::new(&out, &sc, &m)?.stop_on(stop);
-                        analysis::run_with(&sc, &m, backend.as_mut(), &mut prog, &mut w)
+                        analysis::run_with(&sc, &m, ranks, backend.as_mut(), &mut prog, &mut w)
                     }
                 }
             } else {
                 analysis::run_with(
                     &sc,
                     &m,
+                    ranks,
                     backend.as_mut(),
                     &mut prog,
                     &mut analysis::dynamics::NoMonitor,

@@ -6,12 +6,16 @@
 //! subdivide edges, placed on both sides of a joint so that contacts stay node to node).
 //! A deformable block is triangulated (constrained Delaunay, `spade`); a rigid block gets
 //! three degrees of freedom (u, v, θ) at its centroid and its nodes follow it rigidly; a
-//! fixed block has no unknowns.
+//! fixed block has no unknowns. The contact elements, found along the joints here and
+//! again while the blocks move: [`contacts`].
 
+pub mod contacts;
 pub mod triangulate;
 
+pub use contacts::Contact;
+
 use crate::geometry::polygon::{centroid, dot, norm, signed_area, sub, Point};
-use crate::geometry::{find_joints, JointSegment};
+use crate::geometry::JointSegment;
 use crate::scene::{BlockKind, Scene, Support};
 use dfem_kernels::CONSTRAINED;
 
@@ -41,54 +45,6 @@ pub struct MeshBlock {
     pub centroid: Point,
 }
 
-/// A node-to-node contact element (docs/theory.md §3).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Contact {
-    /// Node `l` on block `block_l`, node `m` on block `block_m`, at the same position.
-    pub node_l: u32,
-    pub node_m: u32,
-    pub block_l: u32,
-    pub block_m: u32,
-    /// Unit normal from block l into block m, from the edge geometry.
-    pub normal: Point,
-    /// The corner nodes of block l's edge that carries the contact (start, end, counter-
-    /// clockwise): the normal follows them when the geometry is updated.
-    pub edge_l: [u32; 2],
-    /// Tributary length along the joint (m); the contact area is `length × thickness`.
-    pub length: f64,
-    /// Index of the joint segment it belongs to (`u32::MAX` for a contact found during a
-    /// dynamic run).
-    pub segment: u32,
-    /// A vertex-to-edge contact found during a large motion (docs/theory.md §5): the l side is
-    /// the point at this fraction (0 to 1) along `edge_l` (two consecutive boundary nodes
-    /// of block l), not a node; `node_l` is then the nearer end of that edge.
-    pub along: Option<f64>,
-}
-
-impl Contact {
-    /// The nodes and weights whose combination is the contact's point on block l:
-    /// `node_l` alone, or the two ends of `edge_l` for a vertex-to-edge contact.
-    pub fn l_points(&self) -> [(u32, f64); 2] {
-        match self.along {
-            None => [(self.node_l, 1.0), (self.node_l, 0.0)],
-            Some(w) => [(self.edge_l[0], 1.0 - w), (self.edge_l[1], w)],
-        }
-    }
-
-    /// The contact's point on block l from per-node values (positions, displacements).
-    pub fn at_l(&self, value: impl Fn(u32) -> Point) -> Point {
-        let mut p = [0.0; 2];
-        for (n, w) in self.l_points() {
-            if w != 0.0 {
-                let v = value(n);
-                p[0] += w * v[0];
-                p[1] += w * v[1];
-            }
-        }
-        p
-    }
-}
-
 /// The mesh of a scene.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Mesh {
@@ -105,12 +61,6 @@ pub struct Mesh {
     pub segments: Vec<JointSegment>,
     pub contacts: Vec<Contact>,
     pub n_dofs: usize,
-    /// In a distributed run (`mpirun`), the process that owns each unknown's row and this
-    /// process's rank: the assembly evaluates only the elements of this process's rows and
-    /// exchanges the rest ([`crate::assembly::Ranks`]). `None` (serial) unless set by
-    /// [`crate::solve::configure_run`]; not saved.
-    #[serde(skip)]
-    pub ranks: Option<std::sync::Arc<crate::assembly::Ranks>>,
 }
 
 /// The unknowns a node's displacement depends on: `u_node = G · u[dofs]` with
@@ -257,34 +207,8 @@ impl Mesh {
 pub fn build(scene: &Scene) -> Mesh {
     let tol = scene.contacts.tolerance;
     let polys: Vec<Vec<Point>> = scene.blocks.iter().map(|b| b.vertices.clone()).collect();
-    let segments = find_joints(&polys, tol);
-
-    // 1. Points along each joint segment: the corners of both blocks that lie on it,
-    //    plus subdivision points when either block asks for a mesh size.
-    let seg_points: Vec<Vec<f64>> = segments
-        .iter()
-        .map(|s| {
-            let len = s.length();
-            let t = [(s.p1[0] - s.p0[0]) / len, (s.p1[1] - s.p0[1]) / len];
-            let mut pts = vec![0.0, len];
-            for (blk, edge) in [(s.a, s.edge_a), (s.b, s.edge_b)] {
-                let v = &polys[blk];
-                for p in [v[edge], v[(edge + 1) % v.len()]] {
-                    let x = dot(sub(p, s.p0), t);
-                    if x > tol && x < len - tol {
-                        pts.push(x);
-                    }
-                }
-            }
-            pts.sort_by(f64::total_cmp);
-            pts.dedup_by(|a, b| (*a - *b).abs() <= tol);
-            let h = mesh_size(scene, s.a, s.b);
-            if let Some(h) = h {
-                subdivide(&mut pts, h);
-            }
-            pts
-        })
-        .collect();
+    // 1. Where the blocks touch: the joint segments and the points along them
+    let (segments, seg_points) = contacts::joints(scene, &polys, tol);
 
     // 2. Boundary points of each block, edge by edge: corners, joint points, and
     //    subdivision of the free stretches.
@@ -300,7 +224,7 @@ pub fn build(scene: &Scene) -> Mesh {
             let le = norm(sub(e1, e0));
             let te = [(e1[0] - e0[0]) / le, (e1[1] - e0[1]) / le];
             let along = |x: f64| -> f64 {
-                let p = seg_point(s, x);
+                let p = contacts::seg_point(s, x);
                 dot(sub(p, e0), te)
             };
             let (c0, c1) = (along(0.0), along(s.length()));
@@ -321,7 +245,6 @@ pub fn build(scene: &Scene) -> Mesh {
         segments: Vec::new(),
         contacts: Vec::new(),
         n_dofs: 0,
-        ranks: None,
     };
     // boundary positions (edge, distance along the edge) → node id, per block
     let mut boundary_keys: Vec<Vec<(usize, f64)>> = Vec::with_capacity(polys.len());
@@ -420,101 +343,8 @@ pub fn build(scene: &Scene) -> Mesh {
         boundary_keys.push(keys);
     }
 
-    // 3. Contact elements: one per point of each joint segment, with the tributary length.
-    for (si, (s, pts)) in segments.iter().zip(&seg_points).enumerate() {
-        let n = pts.len();
-        for k in 0..n {
-            let lo = if k == 0 {
-                pts[0]
-            } else {
-                0.5 * (pts[k - 1] + pts[k])
-            };
-            let hi = if k + 1 == n {
-                pts[n - 1]
-            } else {
-                0.5 * (pts[k] + pts[k + 1])
-            };
-            let p = seg_point(s, pts[k]);
-            let node_l = find_boundary_node(&mesh, &polys, &boundary_keys, s.a, s.edge_a, p, tol);
-            let node_m = find_boundary_node(&mesh, &polys, &boundary_keys, s.b, s.edge_b, p, tol);
-            let corner = |v: usize| -> u32 {
-                let k = boundary_keys[s.a]
-                    .iter()
-                    .position(|&(e, x)| e == v && x == 0.0)
-                    .expect("corner node");
-                mesh.blocks[s.a].boundary[k]
-            };
-            let edge_l = [corner(s.edge_a), corner((s.edge_a + 1) % polys[s.a].len())];
-            mesh.contacts.push(Contact {
-                node_l,
-                node_m,
-                block_l: s.a as u32,
-                block_m: s.b as u32,
-                normal: s.normal,
-                edge_l,
-                length: hi - lo,
-                segment: si as u32,
-                along: None,
-            });
-        }
-    }
+    // 3. Contact elements: one per point of each joint segment
+    mesh.contacts = contacts::along_joints(&mesh, &polys, &boundary_keys, &segments, &seg_points);
     mesh.segments = segments;
     mesh
-}
-
-fn mesh_size(scene: &Scene, a: usize, b: usize) -> Option<f64> {
-    match (scene.blocks[a].mesh_size, scene.blocks[b].mesh_size) {
-        (Some(x), Some(y)) => Some(x.min(y)),
-        (x, y) => x.or(y),
-    }
-}
-
-/// Insert equally spaced points so that no gap exceeds `h`.
-fn subdivide(pts: &mut Vec<f64>, h: f64) {
-    let mut out = vec![pts[0]];
-    for w in pts.windows(2) {
-        let n = ((w[1] - w[0]) / h).ceil().max(1.0) as usize;
-        for k in 1..n {
-            out.push(w[0] + (w[1] - w[0]) * k as f64 / n as f64);
-        }
-        out.push(w[1]);
-    }
-    *pts = out;
-}
-
-fn seg_point(s: &JointSegment, x: f64) -> Point {
-    let len = s.length();
-    [
-        s.p0[0] + (s.p1[0] - s.p0[0]) * x / len,
-        s.p0[1] + (s.p1[1] - s.p0[1]) * x / len,
-    ]
-}
-
-/// The boundary node of block `blk` nearest to `p` on edge `edge` (or at its ends).
-fn find_boundary_node(
-    mesh: &Mesh,
-    polys: &[Vec<Point>],
-    keys: &[Vec<(usize, f64)>],
-    blk: usize,
-    edge: usize,
-    p: Point,
-    _tol: f64,
-) -> u32 {
-    let b = &mesh.blocks[blk];
-    let nv = polys[blk].len();
-    let next = (edge + 1) % nv;
-    let mut best = (f64::INFINITY, b.boundary[0]);
-    for (k, &(e, _)) in keys[blk].iter().enumerate() {
-        // nodes on this edge, plus the corner that ends it (first node of the next edge)
-        let on_edge = e == edge || (e == next && keys[blk][k].1 == 0.0);
-        if !on_edge {
-            continue;
-        }
-        let node = b.boundary[k];
-        let d = norm(sub(mesh.nodes[node as usize], p));
-        if d < best.0 {
-            best = (d, node);
-        }
-    }
-    best.1
 }

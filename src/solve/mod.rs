@@ -274,17 +274,19 @@ fn configure_with(
 
 /// [`configure`] for the run of this process (`dfem run`). Under `mpirun` with N > 1
 /// processes (feature `mpi`), also distributes the assembly: the unknowns are split by
-/// [`block_partition`] into N parts, process r's part goes into `mesh.ranks`
-/// ([`crate::assembly::Ranks`]: its assembly evaluates only the elements of its own rows,
-/// then the processes exchange their rows), and a distributed backend (one that asks for
-/// N parts: PETSc, MUMPS) gets the same partition for its rows. Serial: [`configure`].
+/// [`block_partition`] into N parts, returned with this process's rank
+/// ([`crate::assembly::Ranks`], for the analysis to pass to
+/// [`crate::assembly::System::distributed`]: each process's assembly evaluates only the
+/// elements of its own rows, then the processes exchange their rows), and a distributed
+/// backend (one that asks for N parts: PETSc, MUMPS) gets the same partition for its
+/// rows. Serial: [`configure`], and `None`.
 pub fn configure_run(
     backend: &mut dyn LinearBackend,
-    mesh: &mut crate::mesh::Mesh,
-) -> Result<(), SolveError> {
+    mesh: &crate::mesh::Mesh,
+) -> Result<Option<crate::assembly::Ranks>, SolveError> {
     let (rank, size) = dfem_ffi::process_rank();
     if size <= 1 {
-        return configure(backend, mesh);
+        return configure(backend, mesh).map(|()| None);
     }
     let part = block_partition(mesh, size)?;
     // every process must split the rows alike (METIS is deterministic for the same
@@ -302,12 +304,11 @@ pub fn configure_run(
         ));
     }
     configure_with(backend, mesh, Some((size, &part)))?;
-    mesh.ranks = Some(std::sync::Arc::new(crate::assembly::Ranks {
+    Ok(Some(crate::assembly::Ranks {
         part,
         rank: rank as u32,
         size: size as u32,
-    }));
-    Ok(())
+    }))
 }
 
 pub mod bench;

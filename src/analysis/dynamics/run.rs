@@ -34,10 +34,11 @@ pub fn step_count(settings: &Settings) -> usize {
 pub fn run(
     scene: &Scene,
     mesh: &Mesh,
+    ranks: Option<&Ranks>,
     backend: &mut dyn LinearBackend,
     monitor: &mut dyn Monitor,
 ) -> Result<Outcome> {
-    run_from(scene, mesh, backend, monitor, None)
+    run_from(scene, mesh, ranks, backend, monitor, None)
 }
 
 /// [`run`], or its continuation from a checkpoint `from` of the same scene: the rows and
@@ -46,12 +47,13 @@ pub fn run(
 pub fn run_from(
     scene: &Scene,
     mesh: &Mesh,
+    ranks: Option<&Ranks>,
     backend: &mut dyn LinearBackend,
     monitor: &mut dyn Monitor,
     from: Option<Checkpoint>,
 ) -> Result<Outcome> {
     let start = Instant::now();
-    let mut d = Dynamics::new(scene, mesh, backend)?;
+    let mut d = Dynamics::new(scene, mesh, ranks, backend)?;
     // counters of the part of the run before the checkpoint
     let mut before = Stats::default();
     let resumed = from.is_some();

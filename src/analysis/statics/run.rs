@@ -261,15 +261,17 @@ pub(super) fn describe(why: &IncrementFailure) -> String {
     }
 }
 
-/// [`run`], reporting phases, iterations and converged increments to `progress`.
+/// [`run`], reporting phases, iterations and converged increments to `progress`;
+/// `ranks`: this process's rows in a distributed run ([`System::distributed`]).
 pub fn run_with_progress<'a>(
     scene: &'a Scene,
     mesh: &Mesh,
+    ranks: Option<&Ranks>,
     backend: &'a mut dyn LinearBackend,
     progress: &'a mut dyn Progress,
 ) -> Result<Outcome> {
     let start = Instant::now();
-    let mut d = Driver::new(scene, mesh, backend)?;
+    let mut d = Driver::new(scene, mesh, ranks, backend)?;
     d.progress = Some(progress);
     let steps = scene.analysis.load_steps;
     // increments of the gravity phase (`gravity_steps`, default `load_steps`): gravity on

@@ -1,5 +1,15 @@
-//! New contacts in large motion (docs/theory.md §5: "falling blocks must find new contacts
-//! (broad phase + narrow phase detection) rather than pass through each other").
+//! Contact elements: where the blocks touch (docs/theory.md §3), found along the joints
+//! of the scene when the mesh is built, and again in the current geometry while the
+//! blocks move (docs/theory.md §5). One module for both, so that the elements found during a
+//! run are of the same kind and follow the same rules as the initial ones.
+//!
+//! **Along the joints** (`joints`, `along_joints`, for [`super::build`]): the joint
+//! segments where two blocks' edges overlap within the contact tolerance
+//! ([`crate::geometry::find_joints`]), and one node-to-node contact per point along them.
+//!
+//! **In large motion** ([`search`], [`kept`], for the dynamic driver): "falling blocks
+//! must find new contacts (broad phase + narrow phase detection) rather than pass through
+//! each other" (docs/theory.md §5).
 //!
 //! Between time steps, in the current (updated Lagrangian) geometry:
 //! * **broad phase**: the blocks' bounding boxes grown by the reach `r` (m) go into the
@@ -29,11 +39,207 @@
 //! gap exceeds `max(10 h, 2 r, 0.1 × the smaller block's size)` is dropped, and so is a
 //! contact whose m node has slid past the end of its edge of block l.
 
+use super::{BlockDofs, Mesh};
 use crate::geometry::joints::candidate_pairs;
 use crate::geometry::polygon::{bbox, contains, dot, norm, sub, Point};
-use crate::material::ContactState;
-use crate::mesh::{BlockDofs, Contact, Mesh};
+use crate::geometry::{find_joints, JointSegment};
+use crate::scene::Scene;
 use std::collections::HashMap;
+
+/// A node-to-node contact element (docs/theory.md §3).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Contact {
+    /// Node `l` on block `block_l`, node `m` on block `block_m`, at the same position.
+    pub node_l: u32,
+    pub node_m: u32,
+    pub block_l: u32,
+    pub block_m: u32,
+    /// Unit normal from block l into block m, from the edge geometry.
+    pub normal: Point,
+    /// The corner nodes of block l's edge that carries the contact (start, end, counter-
+    /// clockwise): the normal follows them when the geometry is updated.
+    pub edge_l: [u32; 2],
+    /// Tributary length along the joint (m); the contact area is `length × thickness`.
+    pub length: f64,
+    /// Index of the joint segment it belongs to (`u32::MAX` for a contact found during a
+    /// dynamic run).
+    pub segment: u32,
+    /// A vertex-to-edge contact found during a large motion (docs/theory.md §5): the l side is
+    /// the point at this fraction (0 to 1) along `edge_l` (two consecutive boundary nodes
+    /// of block l), not a node; `node_l` is then the nearer end of that edge.
+    pub along: Option<f64>,
+}
+
+impl Contact {
+    /// The nodes and weights whose combination is the contact's point on block l:
+    /// `node_l` alone, or the two ends of `edge_l` for a vertex-to-edge contact.
+    pub fn l_points(&self) -> [(u32, f64); 2] {
+        match self.along {
+            None => [(self.node_l, 1.0), (self.node_l, 0.0)],
+            Some(w) => [(self.edge_l[0], 1.0 - w), (self.edge_l[1], w)],
+        }
+    }
+
+    /// The contact's point on block l from per-node values (positions, displacements).
+    pub fn at_l(&self, value: impl Fn(u32) -> Point) -> Point {
+        let mut p = [0.0; 2];
+        for (n, w) in self.l_points() {
+            if w != 0.0 {
+                let v = value(n);
+                p[0] += w * v[0];
+                p[1] += w * v[1];
+            }
+        }
+        p
+    }
+}
+
+/// Where the blocks `polys` touch (within `tol`): their joint segments, and along each
+/// the points (m from its start) that get a contact: the corners of both blocks that lie
+/// on it, plus subdivision points when either block asks for a mesh size. The mesh puts
+/// boundary nodes of both blocks at these points ([`super::build`]).
+pub(super) fn joints(
+    scene: &Scene,
+    polys: &[Vec<Point>],
+    tol: f64,
+) -> (Vec<JointSegment>, Vec<Vec<f64>>) {
+    let segments = find_joints(polys, tol);
+    let seg_points: Vec<Vec<f64>> = segments
+        .iter()
+        .map(|s| {
+            let len = s.length();
+            let t = [(s.p1[0] - s.p0[0]) / len, (s.p1[1] - s.p0[1]) / len];
+            let mut pts = vec![0.0, len];
+            for (blk, edge) in [(s.a, s.edge_a), (s.b, s.edge_b)] {
+                let v = &polys[blk];
+                for p in [v[edge], v[(edge + 1) % v.len()]] {
+                    let x = dot(sub(p, s.p0), t);
+                    if x > tol && x < len - tol {
+                        pts.push(x);
+                    }
+                }
+            }
+            pts.sort_by(f64::total_cmp);
+            pts.dedup_by(|a, b| (*a - *b).abs() <= tol);
+            let h = mesh_size(scene, s.a, s.b);
+            if let Some(h) = h {
+                subdivide(&mut pts, h);
+            }
+            pts
+        })
+        .collect();
+    (segments, seg_points)
+}
+
+/// The node-to-node contact elements of the joints (`joints`): one at each point of a
+/// joint segment, between the boundary nodes of its two blocks there, with its tributary
+/// length (half the distance to each neighbouring point). `keys`: per block, the edge
+/// and the distance along it of each boundary node.
+pub(super) fn along_joints(
+    mesh: &Mesh,
+    polys: &[Vec<Point>],
+    keys: &[Vec<(usize, f64)>],
+    segments: &[JointSegment],
+    seg_points: &[Vec<f64>],
+) -> Vec<Contact> {
+    let mut contacts = Vec::new();
+    for (si, (s, pts)) in segments.iter().zip(seg_points).enumerate() {
+        let n = pts.len();
+        for k in 0..n {
+            let lo = if k == 0 {
+                pts[0]
+            } else {
+                0.5 * (pts[k - 1] + pts[k])
+            };
+            let hi = if k + 1 == n {
+                pts[n - 1]
+            } else {
+                0.5 * (pts[k] + pts[k + 1])
+            };
+            let p = seg_point(s, pts[k]);
+            let node_l = find_boundary_node(mesh, polys, keys, s.a, s.edge_a, p);
+            let node_m = find_boundary_node(mesh, polys, keys, s.b, s.edge_b, p);
+            let corner = |v: usize| -> u32 {
+                let k = keys[s.a]
+                    .iter()
+                    .position(|&(e, x)| e == v && x == 0.0)
+                    .expect("corner node");
+                mesh.blocks[s.a].boundary[k]
+            };
+            let edge_l = [corner(s.edge_a), corner((s.edge_a + 1) % polys[s.a].len())];
+            contacts.push(Contact {
+                node_l,
+                node_m,
+                block_l: s.a as u32,
+                block_m: s.b as u32,
+                normal: s.normal,
+                edge_l,
+                length: hi - lo,
+                segment: si as u32,
+                along: None,
+            });
+        }
+    }
+    contacts
+}
+
+/// The mesh size along a joint between blocks `a` and `b`: the smaller one asked for.
+fn mesh_size(scene: &Scene, a: usize, b: usize) -> Option<f64> {
+    match (scene.blocks[a].mesh_size, scene.blocks[b].mesh_size) {
+        (Some(x), Some(y)) => Some(x.min(y)),
+        (x, y) => x.or(y),
+    }
+}
+
+/// Insert equally spaced points so that no gap exceeds `h`.
+fn subdivide(pts: &mut Vec<f64>, h: f64) {
+    let mut out = vec![pts[0]];
+    for w in pts.windows(2) {
+        let n = ((w[1] - w[0]) / h).ceil().max(1.0) as usize;
+        for k in 1..n {
+            out.push(w[0] + (w[1] - w[0]) * k as f64 / n as f64);
+        }
+        out.push(w[1]);
+    }
+    *pts = out;
+}
+
+/// The point at distance `x` (m) along joint segment `s`.
+pub(super) fn seg_point(s: &JointSegment, x: f64) -> Point {
+    let len = s.length();
+    [
+        s.p0[0] + (s.p1[0] - s.p0[0]) * x / len,
+        s.p0[1] + (s.p1[1] - s.p0[1]) * x / len,
+    ]
+}
+
+/// The boundary node of block `blk` nearest to `p` on edge `edge` (or at its ends).
+fn find_boundary_node(
+    mesh: &Mesh,
+    polys: &[Vec<Point>],
+    keys: &[Vec<(usize, f64)>],
+    blk: usize,
+    edge: usize,
+    p: Point,
+) -> u32 {
+    let b = &mesh.blocks[blk];
+    let nv = polys[blk].len();
+    let next = (edge + 1) % nv;
+    let mut best = (f64::INFINITY, b.boundary[0]);
+    for (k, &(e, _)) in keys[blk].iter().enumerate() {
+        // nodes on this edge, plus the corner that ends it (first node of the next edge)
+        let on_edge = e == edge || (e == next && keys[blk][k].1 == 0.0);
+        if !on_edge {
+            continue;
+        }
+        let node = b.boundary[k];
+        let d = norm(sub(mesh.nodes[node as usize], p));
+        if d < best.0 {
+            best = (d, node);
+        }
+    }
+    best.1
+}
 
 /// A vertex-to-edge contact found, with its signed gap (m, > 0 open).
 #[derive(Debug, Clone, PartialEq)]
@@ -78,18 +284,18 @@ pub fn along_edge(mesh: &Mesh, c: &Contact) -> f64 {
     dot(sub(mesh.nodes[c.node_m as usize], a), e) / dot(e, e)
 }
 
-/// Which contacts to keep: all but the open ones separated far beyond the band, and those
-/// whose m node has slid off the end of its edge of block l by more than the band (a
-/// node-to-node contact holds only while its node is over the edge; past it the edge's
-/// line would hold the node up where there is no block: the search finds the node again
-/// on the edge it meets next).
-pub fn kept(mesh: &Mesh, states: &[ContactState], band: f64, reach: f64) -> Vec<bool> {
+/// Which contacts to keep: all but the open ones (`open[k]`: contact k is open)
+/// separated far beyond the band, and those whose m node has slid off the end of its edge
+/// of block l by more than the band (a node-to-node contact holds only while its node is
+/// over the edge; past it the edge's line would hold the node up where there is no block:
+/// the search finds the node again on the edge it meets next).
+pub fn kept(mesh: &Mesh, open: &[bool], band: f64, reach: f64) -> Vec<bool> {
     let polys = boundaries(mesh);
     let size = sizes(&polys);
     mesh.contacts
         .iter()
-        .zip(states)
-        .map(|(c, s)| {
+        .zip(open)
+        .map(|(c, &open)| {
             let small = size[c.block_l as usize].min(size[c.block_m as usize]);
             let far = (10.0 * band).max(2.0 * reach).max(0.1 * small);
             let (a, b) = (
@@ -98,7 +304,7 @@ pub fn kept(mesh: &Mesh, states: &[ContactState], band: f64, reach: f64) -> Vec<
             );
             let slack = band / norm(sub(b, a));
             let w = along_edge(mesh, c);
-            (*s != ContactState::Open || gap(mesh, c) <= far) && w >= -slack && w <= 1.0 + slack
+            (!open || gap(mesh, c) <= far) && w >= -slack && w <= 1.0 + slack
         })
         .collect()
 }

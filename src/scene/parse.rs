@@ -15,15 +15,6 @@ mod output;
 
 use super::*;
 use crate::error::{Error, Result};
-use blocks::RawBlock;
-use contacts::RawContacts;
-use imports::RawImport;
-use in_situ::RawInSitu;
-use joints::RawJoint;
-use loads::RawLoad;
-use materials::RawMaterial;
-use model::RawModel;
-use output::RawOutput;
 use serde::Deserialize;
 use std::collections::hash_map::{self, HashMap};
 use std::path::Path;
@@ -56,6 +47,107 @@ struct RawScene {
     analysis: Option<Spanned<toml::Table>>,
     output: Option<Spanned<RawOutput>>,
     in_situ: Option<Spanned<RawInSitu>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawInSitu {
+    stress: Option<[f64; 3]>,
+    gradient: Option<[f64; 3]>,
+    datum: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawModel {
+    plane: Option<String>,
+    thickness: Option<f64>,
+    gravity: Option<[f64; 2]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMaterial {
+    name: Option<String>,
+    lame_lambda: Option<f64>,
+    lame_mu: Option<f64>,
+    unit_weight: Option<f64>,
+    viscous_lambda: Option<f64>,
+    viscous_mu: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawJoint {
+    name: Option<String>,
+    normal_modulus: Option<f64>,
+    shear_modulus: Option<f64>,
+    normal_viscosity: Option<f64>,
+    shear_viscosity: Option<f64>,
+    band: Option<f64>,
+    friction_angle: Option<f64>,
+    cohesion: Option<f64>,
+    tensile_strength: Option<f64>,
+    softening: Option<String>,
+    fracture_energy_i: Option<f64>,
+    fracture_energy_ii: Option<f64>,
+    compressive_strength: Option<f64>,
+    cap_shear_factor: Option<f64>,
+    compressive_fracture_energy: Option<f64>,
+    cap_peak_displacement: Option<f64>,
+    dilatancy_angle: Option<f64>,
+    dilatancy_stress: Option<f64>,
+    within: Option<String>,
+    blocks: Option<Vec<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBlock {
+    name: Option<String>,
+    material: Option<String>,
+    vertices: Option<Vec<[f64; 2]>>,
+    support: Option<String>,
+    kind: Option<String>,
+    mesh_size: Option<f64>,
+    prescribed: Option<[f64; 2]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawImport {
+    file: Option<String>,
+    format: Option<String>,
+    name: Option<String>,
+    material: Option<String>,
+    materials: Option<std::collections::BTreeMap<String, String>>,
+    fixed: Option<Vec<String>>,
+    kind: Option<String>,
+    mesh_size: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawContacts {
+    joint: Option<String>,
+    tolerance: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLoad {
+    block: Option<String>,
+    force: Option<[f64; 2]>,
+    along: Option<[[f64; 2]; 2]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawOutput {
+    track: Option<Vec<String>>,
+    vtk: Option<bool>,
+    every: Option<i64>,
+    checkpoint_every: Option<i64>,
 }
 
 /// Keys of `[analysis]`: those of every analysis type (a key that the scene's type does

@@ -2,26 +2,13 @@
 //! scene, given, generated and imported.
 
 use super::materials::material_key;
-use super::{check_value, err_at, warning, Named, Src, MAX_BLOCKS};
+use super::{check_value, err_at, warning, Named, RawBlock, Src, MAX_BLOCKS};
 use crate::error::{Error, Result};
 use crate::geometry::overlapping_pairs;
 use crate::geometry::polygon::{self, PolygonDefect};
 use crate::scene::{Block, BlockKind, Material, Support};
-use serde::Deserialize;
 use std::path::Path;
 use toml::Spanned;
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawBlock {
-    name: Option<String>,
-    material: Option<String>,
-    vertices: Option<Vec<[f64; 2]>>,
-    support: Option<String>,
-    kind: Option<String>,
-    mesh_size: Option<f64>,
-    prescribed: Option<[f64; 2]>,
-}
 
 /// The `[[block]]` tables, checked: named, with a defined material, vertices, support,
 /// kind, mesh size and prescribed displacement (the polygons are checked by

@@ -1,18 +1,10 @@
 //! `[contacts]`: the default joint and the contact tolerance.
 
-use super::{err_at, index_of, Src};
+use super::{err_at, index_of, RawContacts, Src};
 use crate::error::{Error, Result};
 use crate::geometry::polygon;
 use crate::scene::{Block, Contacts, Joint};
-use serde::Deserialize;
 use toml::Spanned;
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawContacts {
-    joint: Option<String>,
-    tolerance: Option<f64>,
-}
 
 /// `[contacts]`, checked: the joint named or the only one, the tolerance (m) given or a
 /// millionth of the scene's size.

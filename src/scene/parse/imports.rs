@@ -2,26 +2,12 @@
 
 use super::blocks::{parse_kind, room_for};
 use super::materials::material_index;
-use super::{check_value, err_at, Src};
+use super::{check_value, err_at, RawImport, Src};
 use crate::error::Result;
 use crate::scene::import;
 use crate::scene::{Block, Material, Support};
-use serde::Deserialize;
 use std::path::Path;
 use toml::Spanned;
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawImport {
-    file: Option<String>,
-    format: Option<String>,
-    name: Option<String>,
-    material: Option<String>,
-    materials: Option<std::collections::BTreeMap<String, String>>,
-    fixed: Option<Vec<String>>,
-    kind: Option<String>,
-    mesh_size: Option<f64>,
-}
 
 /// The blocks of the `[[import]]` entries, appended to `blocks`; `file` is the scene's,
 /// the directory of relative names.

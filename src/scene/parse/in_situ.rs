@@ -1,19 +1,10 @@
 //! `[in_situ]`: the stress of the rock before the excavation.
 
-use super::{err_at, warning, Src};
+use super::{err_at, warning, RawInSitu, Src};
 use crate::error::Result;
 use crate::scene::{Block, InSitu, Material, Support};
-use serde::Deserialize;
 use std::path::Path;
 use toml::Spanned;
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawInSitu {
-    stress: Option<[f64; 3]>,
-    gradient: Option<[f64; 3]>,
-    datum: Option<f64>,
-}
 
 /// `[in_situ]`, checked: finite; a gradient out of equilibrium with `gravity` (m/s²) in
 /// the material of a free block is a warning in `warnings` (`file` names the scene).

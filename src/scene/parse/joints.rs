@@ -1,35 +1,9 @@
 //! `[[joint]]`: the contact laws of the joints between blocks.
 
-use super::{check_value, err_at, required, Named, Src};
+use super::{check_value, err_at, required, Named, RawJoint, Src};
 use crate::error::Result;
 use crate::scene::{Block, Joint, JointCap, JointSoftening};
-use serde::Deserialize;
 use toml::Spanned;
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawJoint {
-    name: Option<String>,
-    normal_modulus: Option<f64>,
-    shear_modulus: Option<f64>,
-    normal_viscosity: Option<f64>,
-    shear_viscosity: Option<f64>,
-    band: Option<f64>,
-    friction_angle: Option<f64>,
-    cohesion: Option<f64>,
-    tensile_strength: Option<f64>,
-    softening: Option<String>,
-    fracture_energy_i: Option<f64>,
-    fracture_energy_ii: Option<f64>,
-    compressive_strength: Option<f64>,
-    cap_shear_factor: Option<f64>,
-    compressive_fracture_energy: Option<f64>,
-    cap_peak_displacement: Option<f64>,
-    dilatancy_angle: Option<f64>,
-    dilatancy_stress: Option<f64>,
-    within: Option<String>,
-    blocks: Option<Vec<String>>,
-}
 
 /// The `[[joint]]` tables, checked: named, unique, the elastic, strength, softening,
 /// cap and dilatancy parameters consistent. Their `blocks` are resolved by

@@ -1,19 +1,10 @@
 //! `[[load]]`: forces on blocks.
 
-use super::{err_at, Src};
+use super::{err_at, RawLoad, Src};
 use crate::error::Result;
 use crate::geometry::polygon;
 use crate::scene::{Block, Load};
-use serde::Deserialize;
 use toml::Spanned;
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawLoad {
-    block: Option<String>,
-    force: Option<[f64; 2]>,
-    along: Option<[[f64; 2]; 2]>,
-}
 
 /// The `[[load]]` tables, checked: on a block of the scene, a finite force, `along` two
 /// points farther apart than the contact tolerance `tolerance` (m).

@@ -1,21 +1,9 @@
 //! `[[material]]`: the elastic (Kelvin–Voigt) materials of the blocks.
 
-use super::{check_value, err_at, index_of, required, Named, Src};
+use super::{check_value, err_at, index_of, required, Named, RawMaterial, Src};
 use crate::error::Result;
 use crate::scene::Material;
-use serde::Deserialize;
 use toml::Spanned;
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawMaterial {
-    name: Option<String>,
-    lame_lambda: Option<f64>,
-    lame_mu: Option<f64>,
-    unit_weight: Option<f64>,
-    viscous_lambda: Option<f64>,
-    viscous_mu: Option<f64>,
-}
 
 /// The `[[material]]` tables, checked: named, unique, moduli and unit weight given.
 pub(super) fn parse_materials(src: &Src, raw: &[Spanned<RawMaterial>]) -> Result<Vec<Material>> {

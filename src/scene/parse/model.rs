@@ -1,18 +1,9 @@
 //! `[model]`: the plane idealisation, the thickness and gravity.
 
-use super::{err_at, Src};
+use super::{err_at, RawModel, Src};
 use crate::error::Result;
 use crate::scene::{Model, Plane, STANDARD_GRAVITY};
-use serde::Deserialize;
 use toml::Spanned;
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawModel {
-    plane: Option<String>,
-    thickness: Option<f64>,
-    gravity: Option<[f64; 2]>,
-}
 
 /// `[model]`, checked; without the table plane strain, 1 m thick, under standard gravity.
 pub(super) fn parse_model(src: &Src, model: Option<&Spanned<RawModel>>) -> Result<Model> {

@@ -1,19 +1,9 @@
 //! `[output]`: the blocks tracked, the ParaView frames and the checkpoints.
 
-use super::{err_at, Src};
+use super::{err_at, RawOutput, Src};
 use crate::error::Result;
 use crate::scene::{Block, Output};
-use serde::Deserialize;
 use toml::Spanned;
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawOutput {
-    track: Option<Vec<String>>,
-    vtk: Option<bool>,
-    every: Option<i64>,
-    checkpoint_every: Option<i64>,
-}
 
 /// `[output]`, checked: tracked blocks of the scene, whole numbers of steps ≥ 1.
 pub(super) fn parse_output(

@@ -148,7 +148,12 @@ fn cited_docs(t: &str) -> Vec<(usize, String)> {
         if path == "docs/decisions/" {
             // wrapped: skip white space and comment markers, then read the file name
             let mut j = end;
-            while j < t.len() && matches!(bytes[j] as char, ' ' | '\t' | '\n' | '\r' | '/' | '!' | '#' | '*') {
+            while j < t.len()
+                && matches!(
+                    bytes[j] as char,
+                    ' ' | '\t' | '\n' | '\r' | '/' | '!' | '#' | '*'
+                )
+            {
                 j += 1;
             }
             let mut e = j;
@@ -179,7 +184,9 @@ fn md_links(t: &str) -> Vec<(usize, String)> {
     while let Some(k) = t[from..].find("](") {
         let at = from + k + 2;
         from = at;
-        let Some(close) = t[at..].find(')') else { break };
+        let Some(close) = t[at..].find(')') else {
+            break;
+        };
         let target = t[at..at + close].split('#').next().unwrap_or("");
         if target.ends_with(".md") && !target.contains("://") {
             out.push((t[..at].matches('\n').count() + 1, target.to_string()));
@@ -198,7 +205,10 @@ fn cited_docs_exist() {
             for (line, path) in cited_docs(&t) {
                 cited += 1;
                 if !root().join(&path).is_file() {
-                    problems.push(format!("{}:{line}: cites {path}, which does not exist", rel(&f)));
+                    problems.push(format!(
+                        "{}:{line}: cites {path}, which does not exist",
+                        rel(&f)
+                    ));
                 }
             }
             if dir == "docs" && f.extension().is_some_and(|e| e == "md") {
@@ -214,7 +224,10 @@ fn cited_docs_exist() {
             }
         }
     }
-    assert!(cited > 0, "no docs/….md citation found at all: is the scan broken?");
+    assert!(
+        cited > 0,
+        "no docs/….md citation found at all: is the scan broken?"
+    );
     // every decision record is indexed
     let index = fs::read_to_string(root().join("docs/decisions/README.md")).unwrap_or_default();
     for f in files_under("docs/decisions") {
@@ -289,7 +302,9 @@ fn the_equation_map_names_existing_files_and_functions() {
             }
             continue;
         }
-        if c.iter().all(|s| s.chars().all(|ch| matches!(ch, '-' | ':' | ' '))) {
+        if c.iter()
+            .all(|s| s.chars().all(|ch| matches!(ch, '-' | ':' | ' ')))
+        {
             continue; // the separator row
         }
         let (fc, gc) = header.unwrap();
@@ -297,11 +312,15 @@ fn the_equation_map_names_existing_files_and_functions() {
         let files = c.get(fc).map(|s| ticked(s)).unwrap_or_default();
         let funcs = c.get(gc).map(|s| ticked(s)).unwrap_or_default();
         let Some(file) = files.first() else {
-            problems.push(format!("docs/theory.md:{lineno}: no file named (in backticks)\n    {line}"));
+            problems.push(format!(
+                "docs/theory.md:{lineno}: no file named (in backticks)\n    {line}"
+            ));
             continue;
         };
         if funcs.is_empty() {
-            problems.push(format!("docs/theory.md:{lineno}: no function named (in backticks)\n    {line}"));
+            problems.push(format!(
+                "docs/theory.md:{lineno}: no function named (in backticks)\n    {line}"
+            ));
             continue;
         }
         let path = root().join(file);
@@ -319,7 +338,8 @@ fn the_equation_map_names_existing_files_and_functions() {
         }
     }
     if header.is_none() && problems.is_empty() {
-        problems.push("docs/theory.md: the section \"Where each equation lives\" has no table".into());
+        problems
+            .push("docs/theory.md: the section \"Where each equation lives\" has no table".into());
     } else if rows == 0 && problems.is_empty() {
         problems.push("docs/theory.md: the table \"Where each equation lives\" has no rows".into());
     }

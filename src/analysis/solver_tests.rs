@@ -59,10 +59,7 @@ impl Toy {
         };
         self.state = [state];
         self.force = [[-normal, shear]];
-        self.r = [
-            self.load[0] - (self.kw * ux + shear),
-            self.load[1] + normal,
-        ];
+        self.r = [self.load[0] - (self.kw * ux + shear), self.load[1] + normal];
     }
 
     fn norm(&self) -> f64 {
@@ -110,8 +107,17 @@ impl Problem for Toy {
     /// open and free, nothing resists it: the call stops (a singular matrix).
     fn correct(&mut self, _it: usize, _a: &Assessment, _changed: bool) -> Result<Flow> {
         let state = self.state[0];
-        let kx = self.kw + if state == ContactState::Stick { self.ks } else { 0.0 };
-        let ky = if state == ContactState::Open { 0.0 } else { self.kn };
+        let kx = self.kw
+            + if state == ContactState::Stick {
+                self.ks
+            } else {
+                0.0
+            };
+        let ky = if state == ContactState::Open {
+            0.0
+        } else {
+            self.kn
+        };
         if ky == 0.0 && kx == 0.0 {
             return Ok(Flow::Stop);
         }
@@ -142,8 +148,16 @@ fn a_slipping_block_converges_to_the_closed_form() {
         panic!("{end:?}")
     };
     let (ux, uy) = ((800.0 - 0.5 * 1000.0) / 1e7, -1000.0 / 1e9);
-    assert!((toy.u[0] - ux).abs() <= 1e-9 * ux.abs(), "{} {ux}", toy.u[0]);
-    assert!((toy.u[1] - uy).abs() <= 1e-9 * uy.abs(), "{} {uy}", toy.u[1]);
+    assert!(
+        (toy.u[0] - ux).abs() <= 1e-9 * ux.abs(),
+        "{} {ux}",
+        toy.u[0]
+    );
+    assert!(
+        (toy.u[1] - uy).abs() <= 1e-9 * uy.abs(),
+        "{} {uy}",
+        toy.u[1]
+    );
     assert_eq!(toy.state[0], ContactState::Slip);
     // stick (it 0), slip found (it 1), slipping again at the answer (it 2)
     assert_eq!(it, 2);
@@ -170,7 +184,10 @@ fn a_block_that_slides_away_stalls() {
     assert_eq!(end, Ending::Stalled);
     assert!(toy.norm() > 0.2 * 800.0, "{}", toy.norm());
     let n = toy.stats.iterations;
-    assert!((toy.window..2 * toy.window + 3).contains(&n), "{n} iterations");
+    assert!(
+        (toy.window..2 * toy.window + 3).contains(&n),
+        "{n} iterations"
+    );
 }
 
 /// An escalation starts the stall window again: two escalations, three windows.
@@ -182,7 +199,10 @@ fn an_escalation_restarts_the_stall_window() {
     toy.escalations = 2;
     let end = iterate(&mut toy, &controls()).unwrap();
     assert_eq!(end, Ending::Stalled);
-    assert_eq!(toy.stats.iterations, plain.stats.iterations + 2 * toy.window);
+    assert_eq!(
+        toy.stats.iterations,
+        plain.stats.iterations + 2 * toy.window
+    );
 }
 
 /// A block pulled off its contact has a singular matrix once it opens: the problem stops

@@ -7,7 +7,12 @@ use super::*;
 
 impl Dynamics<'_> {
     /// Elastic energy (J) of a state: blocks ½ ∫ σᵀ Dₑ⁻¹ σ, contacts ½ (Fₙ²/kₙ + Fₛ²/kₛ).
-    pub(super) fn elastic_energy(&self, mesh: &Mesh, stress: &[[f64; 3]], force: &[[f64; 2]]) -> f64 {
+    pub(super) fn elastic_energy(
+        &self,
+        mesh: &Mesh,
+        stress: &[[f64; 3]],
+        force: &[[f64; 2]],
+    ) -> f64 {
         let t = self.scene.model.thickness;
         let mut e = 0.0;
         for (k, s) in stress.iter().enumerate() {

@@ -3,7 +3,6 @@
 
 use super::*;
 
-
 /// Blocks written to the history: `[output] track`, or every free block.
 pub fn tracked(scene: &Scene, mesh: &Mesh) -> Vec<usize> {
     if scene.output.track.is_empty() {

@@ -104,8 +104,7 @@ impl Problem for StepTry<'_, '_> {
                 self.flips[k] += 1;
             }
             let pair = [trial.state[k], prev.state[k]];
-            if it > 0 && pair.contains(&ContactState::Stick) && pair.contains(&ContactState::Slip)
-            {
+            if it > 0 && pair.contains(&ContactState::Stick) && pair.contains(&ContactState::Slip) {
                 self.slip_flips[k] += 1;
             }
             if self.flips[k] >= FLIPS_BEFORE_ELASTIC {
@@ -222,8 +221,7 @@ impl Problem for StepTry<'_, '_> {
                 if self.flips[k] >= FLIPS_BEFORE_ELASTIC {
                     l[0][0] = self.weight[k] * d.springs[k].kn;
                 }
-                if self.slip_flips[k] >= FLIPS_BEFORE_ELASTIC && states[k] != ContactState::Open
-                {
+                if self.slip_flips[k] >= FLIPS_BEFORE_ELASTIC && states[k] != ContactState::Open {
                     l[1][1] = d.springs[k].ks;
                 }
                 l
@@ -244,7 +242,14 @@ impl Problem for StepTry<'_, '_> {
         self.last_rn = bal.rn;
         let geometry = d.blocks_geometry(&trial.mesh);
         let blocks = geometry.as_ref().map(|m| m.as_ref().unwrap_or(&trial.mesh));
-        d.effective_into(blocks, &trial.mesh, &secant, &trial.state, &self.terms, false);
+        d.effective_into(
+            blocks,
+            &trial.mesh,
+            &secant,
+            &trial.state,
+            &self.terms,
+            false,
+        );
         if d.backend.factorize(&d.kbuf).is_err() {
             return Ok(Flow::Stop);
         }
@@ -253,7 +258,9 @@ impl Problem for StepTry<'_, '_> {
         // the tangent step where it lowers the out-of-balance force; else the secant step
         let tangent_step = match tangent {
             true => d
-                .tangent_step(trial, blocks, &secant, frozen, terms, dq, bal, it, dug, size)
+                .tangent_step(
+                    trial, blocks, &secant, frozen, terms, dq, bal, it, dug, size,
+                )
                 .filter(|s| s.2.rn < bal.rn),
             false => None,
         };

@@ -122,7 +122,8 @@ impl Driver<'_> {
         if self.held != Held::K0 {
             let mut k = self.elastic_on_cur().clone();
             Self::pin_rows(&self.pins, &mut k);
-            let ok = self.backend.factorize(&k).is_ok() && !crate::analysis::singular_pivots(&*self.backend);
+            let ok = self.backend.factorize(&k).is_ok()
+                && !crate::analysis::singular_pivots(&*self.backend);
             self.held = Held::K0;
             if !ok {
                 return Ok(false);
@@ -547,7 +548,12 @@ impl Driver<'_> {
 
     /// Solve (K_s + ε K₀) x = r, both in the configuration of the last converged
     /// increment (as every iteration matrix: see [`Driver::correction`]).
-    pub(super) fn blended_step(&mut self, trial: &Trial, r: &[f64], eps: f64) -> Result<Option<Vec<f64>>> {
+    pub(super) fn blended_step(
+        &mut self,
+        trial: &Trial,
+        r: &[f64],
+        eps: f64,
+    ) -> Result<Option<Vec<f64>>> {
         let local = self.local_stiffness(trial, &trial.state, false);
         if self.pins.is_empty() {
             // K_s: where `kbuf` holds the secant matrix of these or nearby states (the

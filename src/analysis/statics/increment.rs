@@ -226,14 +226,12 @@ impl Problem for Increment<'_, '_> {
         // converged in: at dq = 0 every contact reports its committed force, which reads
         // as sticking even where it was open or slipping, and an all-sticking (elastic)
         // predictor overshoots where the joints had opened
-        let states = if it == 0
-            && !self.extrapolated
-            && d.committed.state.len() == self.trial.state.len()
-        {
-            d.committed.state.clone()
-        } else {
-            self.trial.state.clone()
-        };
+        let states =
+            if it == 0 && !self.extrapolated && d.committed.state.len() == self.trial.state.len() {
+                d.committed.state.clone()
+            } else {
+                self.trial.state.clone()
+            };
         let r = &self.r;
         // a correction of the size of the model comes from a matrix singular but for
         // round-off (whether the factorization flags it depends on the backend's pivot
@@ -343,8 +341,7 @@ impl Problem for Increment<'_, '_> {
             // there) and the residual's norm does not fall along their free motion until
             // one of those contacts sticks: search along that motion
             if let Some(m) = d.blended_step(&self.trial, r, MODE_BLEND)? {
-                if let Some(moves) =
-                    d.free_motion(&best.2, &best.1.state, &m, &delta, f_ext, presc)
+                if let Some(moves) = d.free_motion(&best.2, &best.1.state, &m, &delta, f_ext, presc)
                 {
                     let mut cand = best.2.clone();
                     for (i, v) in moves.into_iter().flatten() {

@@ -16,7 +16,12 @@ pub(super) const FALLOUT_MAX_SHARE: f64 = 0.01;
 impl Driver<'_> {
     /// A phase starts: `name` for the progress report, `increments` planned (if known),
     /// `scale` its load factor per unit of the phase's factor.
-    pub(super) fn begin_phase(&mut self, name: &'static str, increments: Option<usize>, scale: f64) {
+    pub(super) fn begin_phase(
+        &mut self,
+        name: &'static str,
+        increments: Option<usize>,
+        scale: f64,
+    ) {
         self.report = Report {
             phase: name,
             scale,
@@ -43,7 +48,11 @@ impl Driver<'_> {
 
     /// Run a phase from factor 0 to 1 in `steps` increments (cut when they fail).
     /// Returns the factor reached (1 when the phase completed).
-    pub(super) fn run_phase(&mut self, phase: &Phase, steps: usize) -> Result<(f64, Option<String>)> {
+    pub(super) fn run_phase(
+        &mut self,
+        phase: &Phase,
+        steps: usize,
+    ) -> Result<(f64, Option<String>)> {
         let mut s = 0.0;
         let mut ds = 1.0 / steps as f64;
         let mut cuts = 0;
@@ -535,16 +544,17 @@ pub fn run_with_progress<'a>(
             let mut last: Option<(f64, Vec<f64>)> = None;
             d.begin_phase("capacity", None, 1.0);
             let control = crate::analysis::curve::control_block(mesh);
-            let curve_point = |d: &Driver, lambda: f64, block: usize| crate::analysis::curve::CurvePoint {
-                load_factor: lambda,
-                displacement: crate::analysis::curve::control_displacement(
-                    mesh,
-                    &d.cur,
-                    &d.committed.u,
-                    block,
-                ),
-                reaction: None,
-            };
+            let curve_point =
+                |d: &Driver, lambda: f64, block: usize| crate::analysis::curve::CurvePoint {
+                    load_factor: lambda,
+                    displacement: crate::analysis::curve::control_displacement(
+                        mesh,
+                        &d.cur,
+                        &d.committed.u,
+                        block,
+                    ),
+                    reaction: None,
+                };
             let mut curve: Vec<crate::analysis::curve::CurvePoint> = control
                 .map(|b| curve_point(&d, 0.0, b))
                 .into_iter()

@@ -39,7 +39,11 @@ impl AnalysisTable<'_> {
         } else {
             Err(self.err(
                 key,
-                format!("'{key}' must be a number from {} to {}", short(lo), short(hi)),
+                format!(
+                    "'{key}' must be a number from {} to {}",
+                    short(lo),
+                    short(hi)
+                ),
                 format!("for example {key} = {}", short(d)),
             ))
         }
@@ -83,7 +87,11 @@ impl AnalysisTable<'_> {
         };
         let d = StaticSettings::with_strategy(strategy);
         let switch = |k: &str, d: bool| {
-            self.switch(k, d, &format!("write {k} = true or {k} = false (default {d})"))
+            self.switch(
+                k,
+                d,
+                &format!("write {k} = true or {k} = false (default {d})"),
+            )
         };
         let push = self.push(kind, blocks)?;
         let arc = self.arc(push.is_some())?;
@@ -97,10 +105,7 @@ impl AnalysisTable<'_> {
             bracket: self.number("bracket", d.bracket, 1e-9, 0.5)?,
             line_search: switch("line_search", d.line_search)?,
             fallout: switch("fallout", d.fallout)?,
-            reuse_across_increments: switch(
-                "reuse_across_increments",
-                d.reuse_across_increments,
-            )?,
+            reuse_across_increments: switch("reuse_across_increments", d.reuse_across_increments)?,
             gravity_steps: self
                 .optional_number("gravity_steps", 10.0, 1.0, 1e6)?
                 .map(|s| s.round() as usize),

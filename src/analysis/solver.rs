@@ -58,6 +58,15 @@ pub struct Contacts<'p> {
     pub force: &'p [[f64; 2]],
 }
 
+impl<'t> From<&'t super::config::Trial> for Contacts<'t> {
+    fn from(trial: &'t super::config::Trial) -> Self {
+        Contacts {
+            state: &trial.state,
+            force: &trial.force,
+        }
+    }
+}
+
 /// What a problem's step of the loop asks the loop to do next.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Flow {

@@ -68,10 +68,7 @@ impl Problem for StepTry<'_, '_> {
     }
 
     fn contacts(&self) -> Contacts<'_> {
-        Contacts {
-            state: &self.trial.state,
-            force: &self.trial.force,
-        }
+        Contacts::from(&self.trial)
     }
 
     fn scale(&self) -> f64 {

@@ -83,10 +83,7 @@ impl Problem for Increment<'_, '_> {
     }
 
     fn contacts(&self) -> Contacts<'_> {
-        Contacts {
-            state: &self.trial.state,
-            force: &self.trial.force,
-        }
+        Contacts::from(&self.trial)
     }
 
     fn scale(&self) -> f64 {

@@ -2,9 +2,10 @@
 //! increments, arc-length increments and time steps all go through (docs/theory.md §4,
 //! "The iteration loop").
 //!
-//! A [`Problem`] holds an iterate (the unknowns' increment and its [`super::config::Trial`]: contact
-//! states, forces and the out-of-balance force) and knows how to assess it and correct
-//! it; the loop of [`iterate`] owns what is the same for all of them:
+//! A [`Problem`] holds an iterate (the unknowns' increment and its trial,
+//! [`super::config::Trial`]: contact states, forces and the out-of-balance force) and
+//! knows how to assess it and correct it; the loop of [`iterate`] owns what is the same
+//! for all of them:
 //!
 //! * the convergence test: the out-of-balance norm ‖r‖ ≤ tol · scale (N), with the
 //!   contacts that carry a force that matters (above tol · scale) in the same states as

@@ -151,7 +151,7 @@ struct RawOutput {
 }
 
 /// Keys of `[analysis]`: those of every analysis type (a key that the scene's type does
-/// not read is accepted and has no effect, docs/scene-reference.md "[analysis]").
+/// not read is accepted and has no effect, docs/scene-reference.md, "`[analysis]`").
 pub const ANALYSIS_KEYS: &[&str] = &[
     "type",
     "lateral",

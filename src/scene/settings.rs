@@ -1,5 +1,5 @@
 //! The `[analysis]` settings of each analysis type, typed and validated once when the
-//! scene is read (docs/scene-reference.md, "[analysis]"): the drivers take them as they
+//! scene is read (docs/scene-reference.md, "`[analysis]`"): the drivers take them as they
 //! are, and `dfem check` reports a bad key or value before any run.
 
 use crate::geometry::polygon::Point;

@@ -2,7 +2,8 @@
 //! secant matrix factorized with its symbolic phase reused, the held factorization
 //! corrected for the contacts that changed state by a low-rank update, tangent steps by
 //! GMRES on the held factor or by an LU, the blended step K_s + ε K₀ where the secant matrix
-//! is singular, and the buffers they assemble into (docs/theory.md §4, "Increments and iterations").
+//! is singular, and the buffers they assemble into (docs/theory.md §4, "Increments and
+//! iterations").
 
 use super::*;
 

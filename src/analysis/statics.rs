@@ -75,33 +75,9 @@ pub struct Driver<'a> {
     area: Vec<f64>,
     cur: Mesh,
     committed: Committed,
-    kbuf: CsrMatrix,
-    /// The contacts' local stiffnesses `kbuf` was last assembled with on `cur`, with no
-    /// unknown pinned and nothing added since (`None`: unknown), for
-    /// [`System::stiffness_update`].
-    kbuf_local: Option<Vec<LocalStiffness>>,
-    /// A second persistent matrix buffer, on `cur` as `kbuf`: the matrix that the held
-    /// secant factorization corrected for a low-rank change solves with
-    /// ([`Driver::near_into_aux`]), while `kbuf` holds the iteration matrix; with what
-    /// `aux_local` says it holds, as `kbuf_local`. Its values are allocated at its first
-    /// use.
-    aux: CsrMatrix,
-    aux_local: Option<Vec<LocalStiffness>>,
-    /// Whether the secant matrix that the main backend holds factorized (`Held::Secant`;
-    /// its values: [`LinearBackend::factorized_values`]) was assembled on `cur` (false
-    /// once a converged increment moved the geometry, [`Driver::commit`]).
-    held_current: bool,
-    /// The secant matrix in the held factorization's contact states assembled on `cur`,
-    /// when that factorization is of an older geometry (computed once per increment,
-    /// [`Driver::near_into_aux`]; empty: not yet).
-    held_on_cur: Vec<f64>,
-    /// GMRES on the held secant factorization failed on a tangent step of the current
-    /// increment: the increment's later tangent steps do not try it again
-    /// ([`Driver::tangent_with_secant_factor`]).
-    gmres_failed: bool,
-    /// The elastic stiffness K₀ on `cur` (no unknowns pinned), assembled when first needed
-    /// after a commit ([`Driver::elastic_on_cur`]).
-    k0: Option<CsrMatrix>,
+    /// The linear algebra of the corrections: the backend, what it holds factorized,
+    /// the tangent LU and the matrix buffers ([`corrections::Corrections`]).
+    lin: corrections::Corrections<'a>,
     /// The increment iterated is a capacity search's probe of the load factor, which
     /// stops at shorter stall windows ([`Driver::stall_window`]); the failure that closes
     /// the search's bracket is iterated again with the full ones.
@@ -115,10 +91,6 @@ pub struct Driver<'a> {
     /// run releases when there is no gravity; zero without an in-situ stress.
     scale_floor: f64,
     pub stats: Stats,
-    backend: &'a mut dyn LinearBackend,
-    lu: Option<Box<dyn LinearBackend>>,
-    /// What the main backend holds factorized.
-    held: Held,
     /// The last failing increment (unknowns) and the contact states of its last trial,
     /// for the mechanism.
     pub failure_mode: Option<Failure>,
@@ -313,14 +285,19 @@ impl<'a> Driver<'a> {
                 Some(f) => Committed::in_situ(mesh, f, scene.model.thickness),
                 None => Committed::zero(mesh),
             },
-            kbuf,
-            kbuf_local: None,
-            aux,
-            aux_local: None,
-            held_current: false,
-            held_on_cur: Vec::new(),
-            gmres_failed: false,
-            k0: None,
+            lin: corrections::Corrections {
+                backend,
+                lu: None,
+                held: Held::Nothing,
+                kbuf,
+                kbuf_local: None,
+                aux,
+                aux_local: None,
+                held_current: false,
+                held_on_cur: Vec::new(),
+                gmres_failed: false,
+                k0: None,
+            },
             probing: false,
             converged_norm: 0.0,
             scale_floor: 0.0,
@@ -330,9 +307,6 @@ impl<'a> Driver<'a> {
                 triangles: mesh.triangles.len(),
                 ..Default::default()
             },
-            backend,
-            lu: None,
-            held: Held::Nothing,
             failure_mode: None,
             presc_total: vec![[0.0; 2]; mesh.blocks.len()],
             progress: None,
@@ -606,7 +580,7 @@ impl<'a> Driver<'a> {
         let trial = self.trial(&dq, presc);
         let scale = self.force_scale(f_ext, &trial.f_int);
         let size = self.model_size();
-        self.gmres_failed = false;
+        self.lin.gmres_failed = false;
         let controls = IterationControls {
             tolerance: self.settings.tolerance,
             max_iterations: self.settings.max_iterations,
@@ -693,14 +667,14 @@ impl<'a> Driver<'a> {
         self.committed.history = trial.history;
         let old = std::mem::replace(&mut self.cur, trial.mesh);
         self.keep_spare(old);
-        self.k0 = None;
-        self.kbuf_local = None;
-        self.aux_local = None;
+        self.lin.k0 = None;
+        self.lin.kbuf_local = None;
+        self.lin.aux_local = None;
         // a held secant factorization is now of an older geometry: across increments it
         // preconditions (Driver::reuse) with the change of state corrected
-        self.held_current = false;
-        self.held_on_cur.clear();
-        self.gmres_failed = false;
+        self.lin.held_current = false;
+        self.lin.held_on_cur.clear();
+        self.lin.gmres_failed = false;
         for (t, p) in self.presc_total.iter_mut().zip(presc) {
             t[0] += p[0];
             t[1] += p[1];

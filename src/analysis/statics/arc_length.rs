@@ -450,12 +450,12 @@ impl Driver<'_> {
         if tangent {
             let local = self.tangent_local(trial);
             self.system
-                .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
-            self.kbuf_local = None;
-            Self::pin_rows(&self.pins, &mut self.kbuf);
+                .stiffness_into(&trial.mesh, &local, &mut self.lin.kbuf);
+            self.lin.kbuf_local = None;
+            Self::pin_rows(&self.pins, &mut self.lin.kbuf);
             let size = self.model_size();
-            let lu = corrections::tangent_lu(&mut self.lu, self.backend.name())?;
-            let ok = lu.factorize(&self.kbuf).is_ok()
+            let lu = corrections::tangent_lu(&mut self.lin.lu, self.lin.backend.name())?;
+            let ok = lu.factorize(&self.lin.kbuf).is_ok()
                 && lu.solve(&mut x1).is_ok()
                 && lu.solve(&mut x2).is_ok()
                 && x1.iter().chain(&x2).all(|v| v.is_finite())
@@ -465,21 +465,21 @@ impl Driver<'_> {
         }
         let local = self.local_stiffness(trial, &trial.state, false);
         self.system
-            .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
-        self.kbuf_local = None;
-        Self::pin_rows(&self.pins, &mut self.kbuf);
-        self.held = Held::Nothing;
-        let ok = self.backend.factorize(&self.kbuf).is_ok()
-            && !super::super::singular_pivots(&*self.backend);
+            .stiffness_into(&trial.mesh, &local, &mut self.lin.kbuf);
+        self.lin.kbuf_local = None;
+        Self::pin_rows(&self.pins, &mut self.lin.kbuf);
+        self.lin.held = Held::Nothing;
+        let ok = self.lin.backend.factorize(&self.lin.kbuf).is_ok()
+            && !super::super::singular_pivots(&*self.lin.backend);
         if !ok {
             let Some(x1) = self.blended_step(trial, b1, BLEND)? else {
                 return Ok(None);
             };
             // the blended matrix is still factorized
-            return Ok(self.backend.solve(&mut x2).is_ok().then_some((x1, x2)));
+            return Ok(self.lin.backend.solve(&mut x2).is_ok().then_some((x1, x2)));
         }
-        let ok = self.backend.solve(&mut x1).is_ok()
-            && self.backend.solve(&mut x2).is_ok()
+        let ok = self.lin.backend.solve(&mut x1).is_ok()
+            && self.lin.backend.solve(&mut x2).is_ok()
             && x1.iter().chain(&x2).all(|v| v.is_finite());
         Ok(ok.then_some((x1, x2)))
     }
@@ -726,7 +726,7 @@ pub(super) fn run(
     // blocks that fell out before the push (`fallout`) stay held
     pins.extend(d.fallen_pins.iter().copied());
     d.pins = pins;
-    d.held = Held::Nothing;
+    d.lin.held = Held::Nothing;
     let start = [d.committed.u[f], d.committed.u[f + 1]];
     let along = |d: &Driver| {
         (d.committed.u[f] - start[0]) * s.dir[0] + (d.committed.u[f + 1] - start[1]) * s.dir[1]

@@ -7,6 +7,43 @@
 
 use super::*;
 
+/// The linear algebra state of the static driver's corrections: the run's backend and the
+/// tangent LU, what the backend holds factorized, and the matrix buffers they assemble
+/// into (on the current geometry).
+pub(super) struct Corrections<'a> {
+    pub kbuf: CsrMatrix,
+    /// The contacts' local stiffnesses `kbuf` was last assembled with on `cur`, with no
+    /// unknown pinned and nothing added since (`None`: unknown), for
+    /// [`System::stiffness_update`].
+    pub kbuf_local: Option<Vec<LocalStiffness>>,
+    /// A second persistent matrix buffer, on `cur` as `kbuf`: the matrix that the held
+    /// secant factorization corrected for a low-rank change solves with
+    /// ([`Driver::near_into_aux`]), while `kbuf` holds the iteration matrix; with what
+    /// `aux_local` says it holds, as `kbuf_local`. Its values are allocated at its first
+    /// use.
+    pub aux: CsrMatrix,
+    pub aux_local: Option<Vec<LocalStiffness>>,
+    /// Whether the secant matrix that the main backend holds factorized (`Held::Secant`;
+    /// its values: [`LinearBackend::factorized_values`]) was assembled on `cur` (false
+    /// once a converged increment moved the geometry, [`Driver::commit`]).
+    pub held_current: bool,
+    /// The secant matrix in the held factorization's contact states assembled on `cur`,
+    /// when that factorization is of an older geometry (computed once per increment,
+    /// [`Driver::near_into_aux`]; empty: not yet).
+    pub held_on_cur: Vec<f64>,
+    /// GMRES on the held secant factorization failed on a tangent step of the current
+    /// increment: the increment's later tangent steps do not try it again
+    /// ([`Driver::tangent_with_secant_factor`]).
+    pub gmres_failed: bool,
+    /// The elastic stiffness K₀ on `cur` (no unknowns pinned), assembled when first needed
+    /// after a commit ([`Driver::elastic_on_cur`]).
+    pub k0: Option<CsrMatrix>,
+    pub backend: &'a mut dyn LinearBackend,
+    pub lu: Option<Box<dyn LinearBackend>>,
+    /// What the main backend holds factorized.
+    pub held: Held,
+}
+
 /// A secant correction reuses the held factorization as a preconditioner when at most this
 /// many contacts changed state since it was computed: conjugate gradients need about one
 /// iteration per unit of rank of the change plus three for a change of geometry, and an
@@ -109,28 +146,28 @@ impl Driver<'_> {
     /// no unknowns pinned: assembled once per increment, when first asked for (the
     /// blended steps of a singular secant matrix ask for it at every iteration).
     pub(super) fn elastic_on_cur(&mut self) -> &CsrMatrix {
-        if self.k0.is_none() {
+        if self.lin.k0.is_none() {
             let local = self.elastic_local();
             let mut k = CsrMatrix::zeros(self.system.plan.pattern().clone());
             self.system.stiffness_into(&self.cur, &local, &mut k);
-            self.k0 = Some(k);
+            self.lin.k0 = Some(k);
         }
-        self.k0.as_ref().expect("assembled above")
+        self.lin.k0.as_ref().expect("assembled above")
     }
 
     /// Solve with the elastic stiffness of the initial configuration (factorized once).
     pub(super) fn solve_k0(&mut self, rhs: &mut [f64]) -> Result<bool> {
-        if self.held != Held::K0 {
+        if self.lin.held != Held::K0 {
             let mut k = self.elastic_on_cur().clone();
             Self::pin_rows(&self.pins, &mut k);
-            let ok = self.backend.factorize(&k).is_ok()
-                && !crate::analysis::singular_pivots(&*self.backend);
-            self.held = Held::K0;
+            let ok = self.lin.backend.factorize(&k).is_ok()
+                && !crate::analysis::singular_pivots(&*self.lin.backend);
+            self.lin.held = Held::K0;
             if !ok {
                 return Ok(false);
             }
         }
-        Ok(self.backend.solve(rhs).is_ok())
+        Ok(self.lin.backend.solve(rhs).is_ok())
     }
 
     /// One correction δ = K⁻¹ r with the strategy's matrix; `None` when that matrix is
@@ -181,11 +218,11 @@ impl Driver<'_> {
                     self.hold_secant(states);
                 }
                 let backend: &mut dyn LinearBackend = if newton {
-                    tangent_lu(&mut self.lu, self.backend.name())?
+                    tangent_lu(&mut self.lin.lu, self.lin.backend.name())?
                 } else {
-                    &mut *self.backend
+                    &mut *self.lin.backend
                 };
-                let ok = backend.factorize(&self.kbuf).is_ok()
+                let ok = backend.factorize(&self.lin.kbuf).is_ok()
                     && (newton || !crate::analysis::singular_pivots(&*backend))
                     && backend.solve(&mut x).is_ok()
                     && x.iter().all(|v| v.is_finite());
@@ -207,8 +244,8 @@ impl Driver<'_> {
     /// The size of the model alone decides, never the machine's free memory, so that the
     /// results do not depend on the machine.
     pub(super) fn tangent_lu_too_large(&self) -> bool {
-        let factor = match self.backend.stats().factor_nnz {
-            0 => 8 * self.kbuf.values.len(),
+        let factor = match self.lin.backend.stats().factor_nnz {
+            0 => 8 * self.lin.kbuf.values.len(),
             f => f,
         };
         factor > TANGENT_LU_MAX_ENTRIES
@@ -225,8 +262,8 @@ impl Driver<'_> {
             &self.cur,
             &self.pins,
             local,
-            &mut self.kbuf,
-            &mut self.kbuf_local,
+            &mut self.lin.kbuf,
+            &mut self.lin.kbuf_local,
         );
     }
 
@@ -237,8 +274,8 @@ impl Driver<'_> {
             &self.cur,
             &self.pins,
             local,
-            &mut self.aux,
-            &mut self.aux_local,
+            &mut self.lin.aux,
+            &mut self.lin.aux_local,
         );
     }
 
@@ -273,9 +310,9 @@ impl Driver<'_> {
     /// Record that the main backend holds (or is about to hold) the factorization of
     /// `kbuf`, the secant matrix in `states` on `cur`.
     pub(super) fn hold_secant(&mut self, states: &[ContactState]) {
-        self.held = Held::Secant(states.to_vec());
-        self.held_current = true;
-        self.held_on_cur.clear();
+        self.lin.held = Held::Secant(states.to_vec());
+        self.lin.held_current = true;
+        self.lin.held_on_cur.clear();
     }
 
     /// `aux` ← the matrix that the held secant factorization, of H = K_s(held states) on
@@ -294,38 +331,46 @@ impl Driver<'_> {
     /// factorization is held, or the backend does not give its values (then it offers no
     /// `solve_changed` either).
     pub(super) fn near_into_aux(&mut self, states: &[ContactState], in_kbuf: bool) -> bool {
-        let Held::Secant(held_states) = &self.held else {
+        let Held::Secant(held_states) = &self.lin.held else {
             return false;
         };
-        if self.backend.factorized_values().is_none() {
+        if self.lin.backend.factorized_values().is_none() {
             return false;
         }
-        if self.aux.values.is_empty() {
-            self.aux.values = vec![0.0; self.kbuf.values.len()];
+        if self.lin.aux.values.is_empty() {
+            self.lin.aux.values = vec![0.0; self.lin.kbuf.values.len()];
         }
-        if !self.held_current && self.held_on_cur.is_empty() {
+        if !self.lin.held_current && self.lin.held_on_cur.is_empty() {
             let local = self.secant_local(&held_states.clone());
             self.assemble_aux(local);
-            self.held_on_cur.clone_from(&self.aux.values);
+            self.lin.held_on_cur.clone_from(&self.lin.aux.values);
         }
         if in_kbuf {
-            self.aux.values.copy_from_slice(&self.kbuf.values);
-            self.aux_local.clone_from(&self.kbuf_local);
+            self.lin.aux.values.copy_from_slice(&self.lin.kbuf.values);
+            self.lin.aux_local.clone_from(&self.lin.kbuf_local);
         } else {
             let local = self.secant_local(states);
             self.assemble_aux(local);
         }
-        if !self.held_current {
+        if !self.lin.held_current {
             // exactly H where the contact states agree, so that the change read by the
             // backend is the changed contacts' alone
             let held = self
+                .lin
                 .backend
                 .factorized_values()
                 .expect("checked above; nothing factorized since");
-            for ((a, h), b) in self.aux.values.iter_mut().zip(held).zip(&self.held_on_cur) {
+            for ((a, h), b) in self
+                .lin
+                .aux
+                .values
+                .iter_mut()
+                .zip(held)
+                .zip(&self.lin.held_on_cur)
+            {
                 *a = if *a == *b { *h } else { h + (*a - b) };
             }
-            self.aux_local = None;
+            self.lin.aux_local = None;
         }
         true
     }
@@ -342,18 +387,18 @@ impl Driver<'_> {
         states: &[ContactState],
         r: &[f64],
     ) -> Option<Vec<f64>> {
-        if self.gmres_failed {
+        if self.lin.gmres_failed {
             // it failed earlier in this increment: on the 10⁶-unknown wall
             // (docs/decisions/0011-tangent-lu-size-limit.md) it then failed at every later tangent step of the
             // increment (31 in a row, 30 iterations each)
             return None;
         }
-        if !matches!(self.held, Held::Secant(_)) {
+        if !matches!(self.lin.held, Held::Secant(_)) {
             let local = self.local_stiffness(trial, states, false);
             self.assemble_kbuf(local);
-            self.held = Held::Nothing;
-            let ok = self.backend.factorize(&self.kbuf).is_ok()
-                && !crate::analysis::singular_pivots(&*self.backend);
+            self.lin.held = Held::Nothing;
+            let ok = self.lin.backend.factorize(&self.lin.kbuf).is_ok()
+                && !crate::analysis::singular_pivots(&*self.lin.backend);
             if !ok {
                 return None;
             }
@@ -380,17 +425,17 @@ impl Driver<'_> {
             (0.1 * self.converged_norm / rn.max(1e-300)).clamp(REUSE_TOLERANCE, TANGENT_TOLERANCE);
         let (out, corrected) = match near {
             true => crate::solve::reuse::gmres_with_changed_factor(
-                &self.kbuf,
-                &self.aux,
-                &mut *self.backend,
+                &self.lin.kbuf,
+                &self.lin.aux,
+                &mut *self.lin.backend,
                 r,
                 tolerance,
                 TANGENT_MAX_ITERATIONS,
             ),
             false => (
                 crate::solve::reuse::gmres_with_factor(
-                    &self.kbuf,
-                    &mut *self.backend,
+                    &self.lin.kbuf,
+                    &mut *self.lin.backend,
                     r,
                     tolerance,
                     TANGENT_MAX_ITERATIONS,
@@ -399,7 +444,7 @@ impl Driver<'_> {
             ),
         };
         let Some(out) = out else {
-            self.gmres_failed = true;
+            self.lin.gmres_failed = true;
             if crate::analysis::tracing() {
                 eprintln!("  tangent by GMRES failed (corrected preconditioner: {corrected})");
             }
@@ -424,7 +469,7 @@ impl Driver<'_> {
     /// Contacts whose state in `now` differs from that of the held secant factorization;
     /// `None` when no secant factorization is held.
     pub(super) fn changed_since_factor(&self, now: &[ContactState]) -> Option<usize> {
-        let Held::Secant(states) = &self.held else {
+        let Held::Secant(states) = &self.lin.held else {
             return None;
         };
         Some(states.iter().zip(now).filter(|(a, b)| a != b).count())
@@ -443,7 +488,7 @@ impl Driver<'_> {
     /// unknowns), at 0.13–0.17 for 39 on the 10⁵-unknown wall. The size of the model alone
     /// decides (no timing), so that the results do not depend on the machine.
     pub(super) fn low_rank_limit(&self) -> usize {
-        let n = self.kbuf.pattern.n() as f64;
+        let n = self.lin.kbuf.pattern.n() as f64;
         let scaled = LOW_RANK_MAX_CHANGES as f64 * (n / LOW_RANK_REFERENCE_DOFS).sqrt();
         (scaled as usize).clamp(LOW_RANK_MAX_CHANGES, LOW_RANK_CAP)
     }
@@ -461,18 +506,18 @@ impl Driver<'_> {
     /// refactorization.
     pub(super) fn changed(&mut self, now: &[ContactState], r: &[f64]) -> Option<Vec<f64>> {
         let changed = self.changed_since_factor(now)?;
-        if changed == 0 || changed > self.low_rank_limit() || !self.held_current {
+        if changed == 0 || changed > self.low_rank_limit() || !self.lin.held_current {
             return None;
         }
         let start = std::time::Instant::now();
         let out = crate::solve::reuse::solve_changed(
-            &self.kbuf,
-            &mut *self.backend,
+            &self.lin.kbuf,
+            &mut *self.lin.backend,
             r,
             10.0 * REUSE_TOLERANCE,
         )?;
         self.stats.low_rank_corrections += 1;
-        let rank = self.backend.stats().last_changed_rank;
+        let rank = self.lin.backend.stats().last_changed_rank;
         if crate::analysis::tracing() {
             eprintln!(
                 "  low-rank correction: {changed} contacts changed, rank {rank}, {:.3e} s",
@@ -491,7 +536,7 @@ impl Driver<'_> {
         // across increments (the factorization of an older geometry) the held factor
         // corrected for the change of state (`near_into_aux`) preconditions, up to the
         // low-rank path's limit of changed contacts
-        let across = !self.held_current && changed > 0 && self.settings.reuse_across_increments;
+        let across = !self.lin.held_current && changed > 0 && self.settings.reuse_across_increments;
         let limit = if across {
             self.low_rank_limit()
         } else {
@@ -509,17 +554,17 @@ impl Driver<'_> {
                 return None;
             }
             crate::solve::reuse::solve_with_changed_factor(
-                &self.kbuf,
-                &self.aux,
-                &mut *self.backend,
+                &self.lin.kbuf,
+                &self.lin.aux,
+                &mut *self.lin.backend,
                 r,
                 REUSE_TOLERANCE,
                 REUSE_MAX_ITERATIONS,
             )
         } else {
             crate::solve::reuse::solve_with_factor(
-                &self.kbuf,
-                &mut *self.backend,
+                &self.lin.kbuf,
+                &mut *self.lin.backend,
                 r,
                 REUSE_TOLERANCE,
                 REUSE_MAX_ITERATIONS,
@@ -528,7 +573,7 @@ impl Driver<'_> {
         if crate::analysis::tracing() {
             eprintln!(
                 "  PCG on the held factor: {changed} contacts changed, {} geometry, {:?} iterations",
-                if self.held_current { "same" } else { "older" },
+                if self.lin.held_current { "same" } else { "older" },
                 out.as_ref().map(|o| o.iterations)
             );
         }
@@ -564,19 +609,19 @@ impl Driver<'_> {
         } else {
             // (pinned rows are pinned once, after the blend)
             self.system
-                .stiffness_into(&self.cur, &local, &mut self.kbuf);
+                .stiffness_into(&self.cur, &local, &mut self.lin.kbuf);
         }
-        self.kbuf_local = None;
+        self.lin.kbuf_local = None;
         self.elastic_on_cur();
-        let k0 = self.k0.as_ref().expect("assembled above");
-        for (a, b) in self.kbuf.values.iter_mut().zip(&k0.values) {
+        let k0 = self.lin.k0.as_ref().expect("assembled above");
+        for (a, b) in self.lin.kbuf.values.iter_mut().zip(&k0.values) {
             *a += eps * b;
         }
-        Self::pin_rows(&self.pins, &mut self.kbuf);
-        self.held = Held::Nothing;
+        Self::pin_rows(&self.pins, &mut self.lin.kbuf);
+        self.lin.held = Held::Nothing;
         let mut x = r.to_vec();
-        let ok = self.backend.factorize(&self.kbuf).is_ok()
-            && self.backend.solve(&mut x).is_ok()
+        let ok = self.lin.backend.factorize(&self.lin.kbuf).is_ok()
+            && self.lin.backend.solve(&mut x).is_ok()
             && x.iter().all(|v| v.is_finite());
         Ok(ok.then_some(x))
     }

@@ -276,9 +276,9 @@ impl Problem for Increment<'_, '_> {
             let local = d.local_stiffness(&self.trial, &self.trial.state, false);
             d.assemble_kbuf(local);
             let mut x = r.clone();
-            let ok = d.backend.factorize(&d.kbuf).is_ok()
-                && !super::super::singular_pivots(&*d.backend)
-                && d.backend.solve(&mut x).is_ok()
+            let ok = d.lin.backend.factorize(&d.lin.kbuf).is_ok()
+                && !super::super::singular_pivots(&*d.lin.backend)
+                && d.lin.backend.solve(&mut x).is_ok()
                 && x.iter().all(|v| v.is_finite());
             d.hold_secant(&self.trial.state);
             let x = if ok {

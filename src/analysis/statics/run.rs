@@ -63,7 +63,7 @@ impl Driver<'_> {
         let mut last: Option<(f64, Vec<f64>)> = None;
         if !phase.pin_step.is_empty() || !self.pins.is_empty() || !self.fallen.is_empty() {
             // the held factorizations were computed with other unknowns pinned
-            self.held = Held::Nothing;
+            self.lin.held = Held::Nothing;
         }
         if let Some(b) = phase.record {
             let p = self.push_point(b, 0.0, None);
@@ -183,7 +183,7 @@ impl Driver<'_> {
         }
         self.stats.fallen_blocks += moving.len();
         self.fallen.extend(moving);
-        self.held = Held::Nothing;
+        self.lin.held = Held::Nothing;
         self.failure_mode = None;
         true
     }
@@ -291,23 +291,27 @@ pub fn run_with_progress<'a>(
     let n = mesh.n_dofs;
     let zero_presc = vec![[0.0; 2]; mesh.blocks.len()];
     let finish = |d: &mut Driver, status: Status, lf: Option<f64>, mech: Option<Mechanism>| {
-        let bs = d.backend.stats();
+        let bs = d.lin.backend.stats();
         d.stats.factorizations = bs.numeric_factorizations
-            + d.lu
+            + d.lin
+                .lu
                 .as_ref()
                 .map_or(0, |l| l.stats().numeric_factorizations);
-        d.stats.tangent_factorizations =
-            d.lu.as_ref()
-                .map_or(0, |l| l.stats().numeric_factorizations);
+        d.stats.tangent_factorizations = d
+            .lin
+            .lu
+            .as_ref()
+            .map_or(0, |l| l.stats().numeric_factorizations);
         d.stats.symbolic_factorizations = bs.symbolic_factorizations
-            + d.lu
+            + d.lin
+                .lu
                 .as_ref()
                 .map_or(0, |l| l.stats().symbolic_factorizations);
         d.stats.min_pivot_ratio = bs.min_pivot_ratio;
         d.stats.wall_time_s = start.elapsed().as_secs_f64();
         if crate::analysis::tracing() {
             eprintln!("solver {bs:?}");
-            if let Some(l) = d.lu.as_ref() {
+            if let Some(l) = d.lin.lu.as_ref() {
                 eprintln!("solver (tangent LU) {:?}", l.stats());
             }
             eprintln!("analysis {} s", d.stats.wall_time_s);

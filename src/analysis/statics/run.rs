@@ -270,8 +270,69 @@ pub(super) fn describe(why: &IncrementFailure) -> String {
     }
 }
 
+/// The outcome of the run that `d` ended with `status` (load factor `lf`, mechanism `mech`),
+/// with the backends' counters and the time since `start`.
+fn finish(
+    d: &mut Driver,
+    mesh: &Mesh,
+    start: Instant,
+    status: Status,
+    lf: Option<f64>,
+    mech: Option<Mechanism>,
+) -> Outcome {
+    let bs = d.lin.backend.stats();
+    d.stats.factorizations = bs.numeric_factorizations
+        + d.lin
+            .lu
+            .as_ref()
+            .map_or(0, |l| l.stats().numeric_factorizations);
+    d.stats.tangent_factorizations = d
+        .lin
+        .lu
+        .as_ref()
+        .map_or(0, |l| l.stats().numeric_factorizations);
+    d.stats.symbolic_factorizations = bs.symbolic_factorizations
+        + d.lin
+            .lu
+            .as_ref()
+            .map_or(0, |l| l.stats().symbolic_factorizations);
+    d.stats.min_pivot_ratio = bs.min_pivot_ratio;
+    d.stats.wall_time_s = start.elapsed().as_secs_f64();
+    if crate::analysis::tracing() {
+        eprintln!("solver {bs:?}");
+        if let Some(l) = d.lin.lu.as_ref() {
+            eprintln!("solver (tangent LU) {:?}", l.stats());
+        }
+        eprintln!("analysis {} s", d.stats.wall_time_s);
+    }
+    d.outcome(status, mesh, lf, mech)
+}
+
+/// The outcome of a run that failed (`what`, at load factor `lf`), with its mechanism
+/// classified from the last failing increment.
+fn fail(d: &mut Driver, mesh: &Mesh, start: Instant, what: String, lf: Option<f64>) -> Outcome {
+    let mech = d
+        .failure_mode
+        .as_ref()
+        .map(|f| classify(d.scene, &d.cur, &f.mode, &f.states, &f.forces, &f.loads));
+    let blocks = mech.as_ref().map(|m| m.moving()).unwrap_or_default();
+    finish(
+        d,
+        mesh,
+        start,
+        Status::Failed {
+            reason: what,
+            blocks,
+        },
+        lf,
+        mech,
+    )
+}
+
 /// [`run`], reporting phases, iterations and converged increments to `progress`;
-/// `ranks`: this process's rows in a distributed run ([`System::distributed`]).
+/// `ranks`: this process's rows in a distributed run ([`System::distributed`]). The phases
+/// in turn: gravity and the loads, the prescribed displacements, then the push, the
+/// lateral load or the capacity search.
 pub fn run_with_progress<'a>(
     scene: &'a Scene,
     mesh: &Mesh,
@@ -280,62 +341,32 @@ pub fn run_with_progress<'a>(
     progress: &'a mut dyn Progress,
 ) -> Result<Outcome> {
     let start = Instant::now();
-    let mut d = Driver::new(scene, mesh, ranks, backend)?;
-    d.progress = Some(progress);
-    let steps = scene.analysis.load_steps;
-    // increments of the gravity phase (`gravity_steps`, default `load_steps`): gravity on
-    // a structure that stands is nearly linear and needs few
-    let gravity_steps = d.settings.gravity_steps.unwrap_or(steps);
-    let g = scene.model.gravity;
-    let gnorm = g[0].hypot(g[1]);
-    let n = mesh.n_dofs;
-    let zero_presc = vec![[0.0; 2]; mesh.blocks.len()];
-    let finish = |d: &mut Driver, status: Status, lf: Option<f64>, mech: Option<Mechanism>| {
-        let bs = d.lin.backend.stats();
-        d.stats.factorizations = bs.numeric_factorizations
-            + d.lin
-                .lu
-                .as_ref()
-                .map_or(0, |l| l.stats().numeric_factorizations);
-        d.stats.tangent_factorizations = d
-            .lin
-            .lu
-            .as_ref()
-            .map_or(0, |l| l.stats().numeric_factorizations);
-        d.stats.symbolic_factorizations = bs.symbolic_factorizations
-            + d.lin
-                .lu
-                .as_ref()
-                .map_or(0, |l| l.stats().symbolic_factorizations);
-        d.stats.min_pivot_ratio = bs.min_pivot_ratio;
-        d.stats.wall_time_s = start.elapsed().as_secs_f64();
-        if crate::analysis::tracing() {
-            eprintln!("solver {bs:?}");
-            if let Some(l) = d.lin.lu.as_ref() {
-                eprintln!("solver (tangent LU) {:?}", l.stats());
-            }
-            eprintln!("analysis {} s", d.stats.wall_time_s);
-        }
-        d.outcome(status, mesh, lf, mech)
+    let mut driver = Driver::new(scene, mesh, ranks, backend)?;
+    driver.progress = Some(progress);
+    let d = &mut driver;
+    if let Some(out) = unsupported(d, mesh, start) {
+        return Ok(out);
+    }
+    let f_grav = match gravity_phase(d, mesh, start)? {
+        Ok(f) => f,
+        Err(out) => return Ok(out),
     };
-    let fail = |d: &mut Driver, what: String, lf: Option<f64>| -> Outcome {
-        let mech = d
-            .failure_mode
-            .as_ref()
-            .map(|f| classify(scene, &d.cur, &f.mode, &f.states, &f.forces, &f.loads));
-        let blocks = mech.as_ref().map(|m| m.moving()).unwrap_or_default();
-        finish(
-            d,
-            Status::Failed {
-                reason: what,
-                blocks,
-            },
-            lf,
-            mech,
-        )
-    };
+    if let Some(out) = prescribed_phase(d, mesh, start, &f_grav)? {
+        return Ok(out);
+    }
+    if let Some(push) = d.settings.push {
+        return push_phase(d, mesh, start, &push);
+    }
+    match scene.analysis.kind {
+        AnalysisType::Static => lateral_phase(d, mesh, start),
+        AnalysisType::Capacity => capacity_search(d, mesh, start),
+        AnalysisType::Dynamic => unreachable!("the dynamic driver runs elsewhere"),
+    }
+}
 
-    // groups of blocks with no chain of contacts down to a fixed block fall: a result
+/// Groups of blocks with no chain of contacts down to a fixed block fall: a result.
+fn unsupported(d: &mut Driver, mesh: &Mesh, start: Instant) -> Option<Outcome> {
+    let scene = d.scene;
     let floating = crate::analysis::support::unsupported_blocks(mesh);
     if !floating.is_empty() {
         let names: Vec<&str> = floating
@@ -366,8 +397,10 @@ pub fn run_with_progress<'a>(
             blocks,
             mode: "mixed".into(),
         };
-        return Ok(finish(
-            &mut d,
+        return Some(finish(
+            d,
+            mesh,
+            start,
             Status::Failed {
                 reason,
                 blocks: floating,
@@ -376,7 +409,24 @@ pub fn run_with_progress<'a>(
             Some(mech),
         ));
     }
+    None
+}
 
+/// Gravity and the loads (or the release of an in-situ stress's out-of-balance force):
+/// the gravity force (N), or the outcome where the structure fails under it.
+fn gravity_phase(
+    d: &mut Driver,
+    mesh: &Mesh,
+    start: Instant,
+) -> Result<std::result::Result<Vec<f64>, Outcome>> {
+    let scene = d.scene;
+    let g = scene.model.gravity;
+    let n = mesh.n_dofs;
+    let steps = scene.analysis.load_steps;
+    let zero_presc = vec![[0.0; 2]; mesh.blocks.len()];
+    // increments of the gravity phase (`gravity_steps`, default `load_steps`): gravity on
+    // a structure that stands is nearly linear and needs few
+    let gravity_steps = d.settings.gravity_steps.unwrap_or(steps);
     // phase 1: gravity and loads; from an in-situ stress, the release of its out-of-
     // balance force (the excavation): from the internal forces of the initial state, in
     // equilibrium with themselves, to gravity and the loads (docs/theory.md, "In-situ
@@ -410,12 +460,28 @@ pub fn run_with_progress<'a>(
         } else {
             "of the self-weight"
         };
-        return Ok(fail(
-            &mut d,
+        return Ok(Err(fail(
+            d,
+            mesh,
+            start,
             format!("failed under gravity at {:.1} % {of}: {why}", 100.0 * s),
             None,
-        ));
+        )));
     }
+    Ok(Ok(f_grav))
+}
+
+/// The prescribed displacements of fixed blocks under the gravity force `f_grav` (N): the
+/// outcome where the structure fails under them.
+fn prescribed_phase(
+    d: &mut Driver,
+    mesh: &Mesh,
+    start: Instant,
+    f_grav: &[f64],
+) -> Result<Option<Outcome>> {
+    let scene = d.scene;
+    let n = mesh.n_dofs;
+    let steps = scene.analysis.load_steps;
     // phase 2: prescribed displacements of fixed blocks
     let presc: Vec<Point> = scene
         .blocks
@@ -424,7 +490,7 @@ pub fn run_with_progress<'a>(
         .collect();
     if presc.iter().any(|p| *p != [0.0; 2]) {
         let phase = Phase {
-            base: f_grav.clone(),
+            base: f_grav.to_vec(),
             step: vec![0.0; n],
             presc_step: presc,
             pin_step: Vec::new(),
@@ -433,229 +499,255 @@ pub fn run_with_progress<'a>(
         d.begin_phase("prescribed", Some(steps), 1.0);
         let (s, why) = d.run_phase(&phase, steps)?;
         if let Some(why) = why {
-            return Ok(fail(
-                &mut d,
+            return Ok(Some(fail(
+                d,
+                mesh,
+                start,
                 format!(
                     "failed at {:.1} % of the prescribed displacement: {why}",
                     100.0 * s
                 ),
                 None,
+            )));
+        }
+    }
+    Ok(None)
+}
+
+/// Displacement control of the pushed block (or its arc-length path): the outcome, with
+/// the capacity curve.
+fn push_phase(d: &mut Driver, mesh: &Mesh, start: Instant, push: &Push) -> Result<Outcome> {
+    let scene = d.scene;
+    let g = scene.model.gravity;
+    let n = mesh.n_dofs;
+    let steps = scene.analysis.load_steps;
+    let zero_presc = vec![[0.0; 2]; mesh.blocks.len()];
+    let crate::mesh::BlockDofs::Rigid { first, .. } = mesh.blocks[push.block].dofs else {
+        unreachable!("the scene reader admits rigid pushed blocks only")
+    };
+    let f = first as usize;
+    let mut pin_step = vec![(f, push.horizontal), (f + 2, 0.0)];
+    if let Some(v) = push.vertical {
+        pin_step.push((f + 1, v));
+    }
+    let phase = Phase {
+        base: d.external(g, true),
+        step: vec![0.0; n],
+        presc_step: zero_presc.clone(),
+        pin_step,
+        record: Some(push.block),
+    };
+    d.begin_phase("push", Some(steps), 1.0);
+    let (s, why, increments, accepted) = match d.settings.arc {
+        Some(arc) => arc_length::run(d, &phase.base, &push, &arc, steps)?,
+        None => {
+            let (s, why) = d.run_phase(&phase, steps)?;
+            (
+                s,
+                why,
+                [0, 0, d.push_curve.len().saturating_sub(1)],
+                (0, 0.0),
+            )
+        }
+    };
+    let points = std::mem::take(&mut d.push_curve);
+    let (dir, _) = push.direction();
+    let furthest = points.iter().fold(0.0f64, |m, p| {
+        let u = [
+            p.displacement[0] - points[0].displacement[0],
+            p.displacement[1] - points[0].displacement[1],
+        ];
+        m.max(u[0] * dir[0] + u[1] * dir[1])
+    });
+    let curve = crate::analysis::curve::Curve {
+        control_block: push.block,
+        points,
+        path: Some(crate::analysis::curve::PushPath {
+            reached: s,
+            furthest,
+            increments,
+            accepted: accepted.0,
+            accepted_residual: accepted.1,
+            end: why.clone().unwrap_or_else(|| "the end of the push".into()),
+        }),
+    };
+    let mut out = match why {
+        Some(why) => fail(
+            d,
+            mesh,
+            start,
+            format!(
+                "failed at {:.1} % of the push displacement: {why}",
+                100.0 * s
+            ),
+            None,
+        ),
+        None => finish(d, mesh, start, Status::Stable, None, None),
+    };
+    out.capacity_curve = Some(curve);
+    Ok(out)
+}
+
+/// The lateral body force of a static analysis (`lateral` × the weight, +x): the outcome.
+fn lateral_phase(d: &mut Driver, mesh: &Mesh, start: Instant) -> Result<Outcome> {
+    let scene = d.scene;
+    let g = scene.model.gravity;
+    let steps = scene.analysis.load_steps;
+    let zero_presc = vec![[0.0; 2]; mesh.blocks.len()];
+    let gnorm = g[0].hypot(g[1]);
+    let f_base = d.external(g, true);
+    let f_lat = d.external([gnorm, 0.0], false);
+    if scene.analysis.lateral != 0.0 {
+        let step: Vec<f64> = f_lat.iter().map(|x| x * scene.analysis.lateral).collect();
+        let phase = Phase {
+            base: f_base,
+            step,
+            presc_step: zero_presc.clone(),
+            pin_step: Vec::new(),
+            record: None,
+        };
+        d.begin_phase("lateral", Some(steps), scene.analysis.lateral);
+        let (s, why) = d.run_phase(&phase, steps)?;
+        if let Some(why) = why {
+            return Ok(fail(
+                d,
+                mesh,
+                start,
+                format!(
+                    "failed at a lateral coefficient of {:.4}: {why}",
+                    s * scene.analysis.lateral
+                ),
+                Some(s * scene.analysis.lateral),
             ));
         }
     }
-    // phase 3: displacement control
-    if let Some(push) = d.settings.push {
-        let crate::mesh::BlockDofs::Rigid { first, .. } = mesh.blocks[push.block].dofs else {
-            unreachable!("the scene reader admits rigid pushed blocks only")
-        };
-        let f = first as usize;
-        let mut pin_step = vec![(f, push.horizontal), (f + 2, 0.0)];
-        if let Some(v) = push.vertical {
-            pin_step.push((f + 1, v));
-        }
-        let phase = Phase {
-            base: d.external(g, true),
-            step: vec![0.0; n],
-            presc_step: zero_presc.clone(),
-            pin_step,
-            record: Some(push.block),
-        };
-        d.begin_phase("push", Some(steps), 1.0);
-        let (s, why, increments, accepted) = match d.settings.arc {
-            Some(arc) => arc_length::run(&mut d, &phase.base, &push, &arc, steps)?,
-            None => {
-                let (s, why) = d.run_phase(&phase, steps)?;
-                (
-                    s,
-                    why,
-                    [0, 0, d.push_curve.len().saturating_sub(1)],
-                    (0, 0.0),
-                )
-            }
-        };
-        let points = std::mem::take(&mut d.push_curve);
-        let (dir, _) = push.direction();
-        let furthest = points.iter().fold(0.0f64, |m, p| {
-            let u = [
-                p.displacement[0] - points[0].displacement[0],
-                p.displacement[1] - points[0].displacement[1],
-            ];
-            m.max(u[0] * dir[0] + u[1] * dir[1])
-        });
-        let curve = crate::analysis::curve::Curve {
-            control_block: push.block,
-            points,
-            path: Some(crate::analysis::curve::PushPath {
-                reached: s,
-                furthest,
-                increments,
-                accepted: accepted.0,
-                accepted_residual: accepted.1,
-                end: why.clone().unwrap_or_else(|| "the end of the push".into()),
-            }),
-        };
-        let mut out = match why {
-            Some(why) => fail(
-                &mut d,
-                format!(
-                    "failed at {:.1} % of the push displacement: {why}",
-                    100.0 * s
-                ),
-                None,
-            ),
-            None => finish(&mut d, Status::Stable, None, None),
-        };
-        out.capacity_curve = Some(curve);
-        return Ok(out);
-    }
+    Ok(finish(d, mesh, start, Status::Stable, None, None))
+}
+
+/// The capacity search: the horizontal body force λ × the weight raised until the
+/// structure fails, the bracket on λ narrowed by probes (docs/decisions/
+/// 0004-capacity-probe-windows.md, 0005-capacity-bracket-retry.md): the outcome, with λ
+/// and the capacity curve.
+fn capacity_search(d: &mut Driver, mesh: &Mesh, start: Instant) -> Result<Outcome> {
+    let scene = d.scene;
+    let g = scene.model.gravity;
+    let zero_presc = vec![[0.0; 2]; mesh.blocks.len()];
+    let gnorm = g[0].hypot(g[1]);
     let f_base = d.external(g, true);
     let f_lat = d.external([gnorm, 0.0], false);
-    match scene.analysis.kind {
-        AnalysisType::Static => {
-            if scene.analysis.lateral != 0.0 {
-                let step: Vec<f64> = f_lat.iter().map(|x| x * scene.analysis.lateral).collect();
-                let phase = Phase {
-                    base: f_base,
-                    step,
-                    presc_step: zero_presc.clone(),
-                    pin_step: Vec::new(),
-                    record: None,
-                };
-                d.begin_phase("lateral", Some(steps), scene.analysis.lateral);
-                let (s, why) = d.run_phase(&phase, steps)?;
-                if let Some(why) = why {
-                    return Ok(fail(
-                        &mut d,
-                        format!(
-                            "failed at a lateral coefficient of {:.4}: {why}",
-                            s * scene.analysis.lateral
-                        ),
-                        Some(s * scene.analysis.lateral),
-                    ));
+    let dir = scene.analysis.direction;
+    let mut lambda: f64 = 0.0;
+    let mut step = d.settings.initial_step;
+    let mut last_fail: Option<String> = None;
+    let mut upper = f64::INFINITY;
+    let limit = 1e3;
+    // the last converged increment (its step in λ and its unknowns' increment),
+    // extrapolated to start the next one (as in `run_phase`)
+    let mut last: Option<(f64, Vec<f64>)> = None;
+    d.begin_phase("capacity", None, 1.0);
+    let control = crate::analysis::curve::control_block(mesh);
+    let curve_point = |d: &Driver, lambda: f64, block: usize| crate::analysis::curve::CurvePoint {
+        load_factor: lambda,
+        displacement: crate::analysis::curve::control_displacement(
+            mesh,
+            &d.cur,
+            &d.committed.u,
+            block,
+        ),
+        reaction: None,
+    };
+    let mut curve: Vec<crate::analysis::curve::CurvePoint> = control
+        .map(|b| curve_point(d, 0.0, b))
+        .into_iter()
+        .collect();
+    // Raise λ in increments; an increment that fails sets the upper bound and is
+    // cut. A failure from a distant state is not proof of collapse (the path of
+    // slips matters), so the upper bound is retried from the closer states and
+    // dropped when reached. Stops when the bracket [λ, upper] is narrow enough and
+    // its upper bound failed with the full stall windows: the increments are probes
+    // that give up sooner ([`Driver::stall_window`]), and where the bracket is
+    // narrow but its bound failed as a probe, that bound is iterated again with the
+    // full windows from λ (where it then converges, the search goes on above it).
+    // `upper_full`: the failure that set `upper` had the full windows.
+    let mut upper_full = false;
+    loop {
+        let narrow = upper.is_finite()
+            && upper - lambda <= d.settings.bracket * lambda.max(d.settings.initial_step * 1e-3);
+        if (narrow && upper_full) || step <= 1e-12 * d.settings.initial_step || lambda > limit {
+            break;
+        }
+        // a step that ends within round-off of the upper bound retries that bound
+        // itself: converging a hair below it would leave it standing as a bound
+        // that only a failure from a distant state set (a zero-width bracket)
+        let target = if narrow || lambda + step >= upper * (1.0 - 1e-12) {
+            upper
+        } else {
+            lambda + step
+        };
+        d.probing = !narrow;
+        let f: Vec<f64> = f_base
+            .iter()
+            .zip(&f_lat)
+            .map(|(b, l)| b + dir * target * l)
+            .collect();
+        let guess = last
+            .as_ref()
+            .map(|(step, dq)| dq.iter().map(|x| x * (target - lambda) / step).collect());
+        if crate::analysis::tracing() {
+            eprintln!("capacity increment {lambda:.6} -> {target:.6} (upper {upper:.6})");
+        }
+        match d.increment(&f, &zero_presc, guess)? {
+            Ok(trial) => {
+                let dq = trial.dq.clone();
+                d.commit(trial, &dq, &zero_presc);
+                last = Some((target - lambda, dq));
+                lambda = target;
+                d.converged(lambda);
+                if let Some(b) = control {
+                    curve.push(curve_point(d, lambda, b));
+                }
+                if lambda >= upper {
+                    // the earlier failure was the path, not the structure
+                    upper = f64::INFINITY;
+                }
+                if upper.is_infinite() {
+                    step *= 1.5;
                 }
             }
-            Ok(finish(&mut d, Status::Stable, None, None))
-        }
-        AnalysisType::Capacity => {
-            let dir = scene.analysis.direction;
-            let mut lambda: f64 = 0.0;
-            let mut step = d.settings.initial_step;
-            let mut last_fail: Option<String> = None;
-            let mut upper = f64::INFINITY;
-            let limit = 1e3;
-            // the last converged increment (its step in λ and its unknowns' increment),
-            // extrapolated to start the next one (as in `run_phase`)
-            let mut last: Option<(f64, Vec<f64>)> = None;
-            d.begin_phase("capacity", None, 1.0);
-            let control = crate::analysis::curve::control_block(mesh);
-            let curve_point =
-                |d: &Driver, lambda: f64, block: usize| crate::analysis::curve::CurvePoint {
-                    load_factor: lambda,
-                    displacement: crate::analysis::curve::control_displacement(
-                        mesh,
-                        &d.cur,
-                        &d.committed.u,
-                        block,
-                    ),
-                    reaction: None,
-                };
-            let mut curve: Vec<crate::analysis::curve::CurvePoint> = control
-                .map(|b| curve_point(&d, 0.0, b))
-                .into_iter()
-                .collect();
-            // Raise λ in increments; an increment that fails sets the upper bound and is
-            // cut. A failure from a distant state is not proof of collapse (the path of
-            // slips matters), so the upper bound is retried from the closer states and
-            // dropped when reached. Stops when the bracket [λ, upper] is narrow enough and
-            // its upper bound failed with the full stall windows: the increments are probes
-            // that give up sooner ([`Driver::stall_window`]), and where the bracket is
-            // narrow but its bound failed as a probe, that bound is iterated again with the
-            // full windows from λ (where it then converges, the search goes on above it).
-            // `upper_full`: the failure that set `upper` had the full windows.
-            let mut upper_full = false;
-            loop {
-                let narrow = upper.is_finite()
-                    && upper - lambda
-                        <= d.settings.bracket * lambda.max(d.settings.initial_step * 1e-3);
-                if (narrow && upper_full)
-                    || step <= 1e-12 * d.settings.initial_step
-                    || lambda > limit
-                {
-                    break;
-                }
-                // a step that ends within round-off of the upper bound retries that bound
-                // itself: converging a hair below it would leave it standing as a bound
-                // that only a failure from a distant state set (a zero-width bracket)
-                let target = if narrow || lambda + step >= upper * (1.0 - 1e-12) {
-                    upper
+            Err((why, dq)) => {
+                d.failure_mode = Some(dq);
+                if target < upper {
+                    upper_full = !d.probing;
                 } else {
-                    lambda + step
-                };
-                d.probing = !narrow;
-                let f: Vec<f64> = f_base
-                    .iter()
-                    .zip(&f_lat)
-                    .map(|(b, l)| b + dir * target * l)
-                    .collect();
-                let guess = last
-                    .as_ref()
-                    .map(|(step, dq)| dq.iter().map(|x| x * (target - lambda) / step).collect());
-                if crate::analysis::tracing() {
-                    eprintln!("capacity increment {lambda:.6} -> {target:.6} (upper {upper:.6})");
+                    upper_full |= !d.probing;
                 }
-                match d.increment(&f, &zero_presc, guess)? {
-                    Ok(trial) => {
-                        let dq = trial.dq.clone();
-                        d.commit(trial, &dq, &zero_presc);
-                        last = Some((target - lambda, dq));
-                        lambda = target;
-                        d.converged(lambda);
-                        if let Some(b) = control {
-                            curve.push(curve_point(&d, lambda, b));
-                        }
-                        if lambda >= upper {
-                            // the earlier failure was the path, not the structure
-                            upper = f64::INFINITY;
-                        }
-                        if upper.is_infinite() {
-                            step *= 1.5;
-                        }
-                    }
-                    Err((why, dq)) => {
-                        d.failure_mode = Some(dq);
-                        if target < upper {
-                            upper_full = !d.probing;
-                        } else {
-                            upper_full |= !d.probing;
-                        }
-                        upper = upper.min(target);
-                        last_fail = Some(describe(&why));
-                        step = 0.5 * (target - lambda);
-                    }
-                }
+                upper = upper.min(target);
+                last_fail = Some(describe(&why));
+                step = 0.5 * (target - lambda);
             }
-            let curve = control.map(|control_block| crate::analysis::curve::Curve {
-                control_block,
-                points: curve,
-                path: None,
-            });
-            if lambda > limit {
-                let mut out = finish(&mut d, Status::Stable, Some(lambda), None);
-                out.capacity_curve = curve;
-                return Ok(out);
-            }
-            let mut out = fail(
-                &mut d,
-                format!(
-                    "critical load factor {lambda:.6} (bracket [{lambda:.6}, {upper:.6}]): {}",
-                    last_fail.unwrap_or_default()
-                ),
-                Some(lambda),
-            );
-            out.load_factor = Some(lambda);
-            out.capacity_curve = curve;
-            Ok(out)
         }
-        AnalysisType::Dynamic => unreachable!("the dynamic driver runs elsewhere"),
     }
+    let curve = control.map(|control_block| crate::analysis::curve::Curve {
+        control_block,
+        points: curve,
+        path: None,
+    });
+    if lambda > limit {
+        let mut out = finish(d, mesh, start, Status::Stable, Some(lambda), None);
+        out.capacity_curve = curve;
+        return Ok(out);
+    }
+    let mut out = fail(
+        d,
+        mesh,
+        start,
+        format!(
+            "critical load factor {lambda:.6} (bracket [{lambda:.6}, {upper:.6}]): {}",
+            last_fail.unwrap_or_default()
+        ),
+        Some(lambda),
+    );
+    out.load_factor = Some(lambda);
+    out.capacity_curve = curve;
+    Ok(out)
 }

@@ -539,7 +539,7 @@ fn push_phase(d: &mut Driver, mesh: &Mesh, start: Instant, push: &Push) -> Resul
     };
     d.begin_phase("push", Some(steps), 1.0);
     let (s, why, increments, accepted) = match d.settings.arc {
-        Some(arc) => arc_length::run(d, &phase.base, &push, &arc, steps)?,
+        Some(arc) => arc_length::run(d, &phase.base, push, &arc, steps)?,
         None => {
             let (s, why) = d.run_phase(&phase, steps)?;
             (

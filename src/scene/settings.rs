@@ -44,14 +44,6 @@ impl AnalysisSettings {
             .fix("run a scene with [analysis] type = \"dynamic\"")),
         }
     }
-
-    /// The time integration's settings, to change them in a scene built in code.
-    pub fn dynamics_mut(&mut self) -> Option<&mut DynamicSettings> {
-        match self {
-            AnalysisSettings::Dynamic(s) => Some(s),
-            AnalysisSettings::Static(_) => None,
-        }
-    }
 }
 
 /// The iteration strategy (`[analysis] strategy`).

@@ -1,5 +1,5 @@
-//! The static driver's low-rank path (issue 6; `Driver::changed` in
-//! src/analysis/statics.rs, `LinearBackend::solve_changed`): a secant correction in which
+//! The static driver's low-rank path (issue 6; `CorrectionSolver::changed` in
+//! src/analysis/correction.rs, `LinearBackend::solve_changed`): a secant correction in which
 //! a few contacts changed state since the held factorization is solved with that factor
 //! corrected exactly for the change (the Woodbury identity inside the factor,
 //! kernels/src/lowrank.rs) instead of conjugate gradients on it or a refactorization.
@@ -111,7 +111,7 @@ fn deformable_wall_same_results_with_and_without_the_low_rank_path() {
 }
 
 /// The held factorization kept across load increments (`reuse_across_increments`,
-/// `Driver::reuse`): the first corrections of an increment by conjugate gradients
+/// `CorrectionSolver::reuse`): the first corrections of an increment by conjugate gradients
 /// preconditioned with the previous geometry's factor corrected for the contacts that
 /// changed state, instead of a refactorization. Every such correction is solved to a true
 /// relative residual ≤ 10⁻⁹ (as the other paths), so the run converges every increment to

@@ -54,7 +54,8 @@
 
 use super::checkpoint::Checkpoint;
 use super::config::{secant_local, tangent_local, Committed, Inputs, Trial};
-use super::solver::{self, IterationControls, OpenFlips};
+use super::correction::CorrectionSolver;
+use super::solver::{self, IterationControls, OpenFlips, LINE_SEARCH_STEPS};
 use super::{fit_motion, Outcome, Stats, Status};
 use crate::assembly::{loads, mass, LocalStiffness, Ranks, System};
 use crate::geometry::polygon::Point;
@@ -77,9 +78,6 @@ pub use run::{run, run_from, step_count, step_time, tracked};
 /// Open/closed changes of a contact within a step after which its normal spring stays
 /// in the matrix (see [`Dynamics::step`]).
 const FLIPS_BEFORE_ELASTIC: u32 = 2;
-/// GMRES iterations of a tangent step preconditioned with the step's secant
-/// factorization ([`Dynamics::step`]) after which the secant step is taken instead.
-const TANGENT_MAX_ITERATIONS: usize = 30;
 /// A step's iterations switch to tangent steps (once the contact states settle) only
 /// where the secant iteration contracts the out-of-balance norm by less than this
 /// factor an iteration, and then keep to them until a state changes. Always switching
@@ -136,8 +134,6 @@ const DASHPOT_FORCE: f64 = 1e-3;
 /// Penetration (fraction of the band thickness) a contact held open may end a step with
 /// before the step is cut, and the most a new contact starts with.
 const HELD_PENETRATION: f64 = 0.1;
-/// Step lengths tried by the line search of a step's iterations: 1, 1/2, …, 1/8.
-const LINE_SEARCH_STEPS: usize = 4;
 
 pub use crate::scene::settings::{DynamicSettings as Settings, Scheme, Start};
 
@@ -243,9 +239,9 @@ pub struct Dynamics<'a> {
     mass: Vec<f64>,
     iota: [Vec<f64>; 2],
     f_static: Vec<f64>,
-    kbuf: CsrMatrix,
-    /// The tangent effective matrix of [`Dynamics::step`] (allocated at its first use).
-    tbuf: Option<CsrMatrix>,
+    /// The effective matrices' buffers (`kbuf` the secant's, `aux` the tangent's, at its
+    /// first use) and the backend: the shared correction solver.
+    lin: CorrectionSolver<'a>,
     /// C of the last trial balanced, on its geometry (the viscous force C v₁).
     cbuf: Option<CsrMatrix>,
     /// C on the step's start geometry, in the states of the matrix being built
@@ -254,7 +250,6 @@ pub struct Dynamics<'a> {
     diag: Vec<usize>,
     /// Dₑ⁻¹ (1/Pa) of each triangle's material (elastic energy).
     compliance: Vec<[[f64; 3]; 3]>,
-    backend: &'a mut dyn LinearBackend,
     pub stats: Stats,
     pub energy: Energy,
     pub time: f64,
@@ -476,8 +471,7 @@ impl<'a> Dynamics<'a> {
             ranks,
             settings,
             diag: pattern.diagonal_positions(),
-            kbuf: CsrMatrix::zeros(pattern),
-            tbuf: None,
+            lin: CorrectionSolver::new(backend, pattern),
             cmat: cbuf.clone(),
             cbuf,
             system,
@@ -500,7 +494,6 @@ impl<'a> Dynamics<'a> {
             iota,
             f_static,
             compliance,
-            backend,
             stats: Stats {
                 dofs: n,
                 contacts: mesh.contacts.len(),
@@ -570,16 +563,17 @@ impl<'a> Dynamics<'a> {
             .map(|k| secant_local(self.springs[k], states[k]))
             .collect();
         self.system
-            .stiffness_into(&self.cur, &local, &mut self.kbuf);
-        self.kbuf.values.iter_mut().for_each(|k| *k *= beta * h * h);
+            .stiffness_into(&self.cur, &local, &mut self.lin.kbuf);
+        self.lin
+            .kbuf
+            .values
+            .iter_mut()
+            .for_each(|k| *k *= beta * h * h);
         for (i, &p) in self.diag.iter().enumerate() {
-            self.kbuf.values[p] += self.mass[i];
+            self.lin.kbuf.values[p] += self.mass[i];
         }
         let mut x = r;
-        if self.backend.factorize(&self.kbuf).is_ok()
-            && self.backend.solve(&mut x).is_ok()
-            && x.iter().all(|v| v.is_finite())
-        {
+        if self.lin.factorize(false) && self.lin.solve(&mut x) {
             // the filtered acceleration is the one relative to the ground
             self.a = self.absolute_from_relative(&x, self.ground(self.time));
         }
@@ -646,7 +640,7 @@ impl<'a> Dynamics<'a> {
             &scene,
             initial,
             self.ranks,
-            &mut *self.backend,
+            &mut *self.lin.backend,
             silent,
         );
         let Ok(out) = run else {
@@ -679,21 +673,18 @@ impl<'a> Dynamics<'a> {
             .map(|&k| crate::assembly::diagonal(k))
             .collect();
         self.system
-            .stiffness_into(&self.cur, &local, &mut self.kbuf);
-        let mut x: Vec<f64> = self
+            .stiffness_into(&self.cur, &local, &mut self.lin.kbuf);
+        let r: Vec<f64> = self
             .f_static
             .iter()
             .zip(&self.f_int)
             .map(|(f, g)| f - g)
             .collect();
-        let load = norm(&x);
-        let ok = self.backend.factorize(&self.kbuf).is_ok()
-            && !super::singular_pivots(&*self.backend)
-            && self.backend.solve(&mut x).is_ok()
-            && x.iter().all(|v| v.is_finite());
-        if !ok || load == 0.0 {
+        let load = norm(&r);
+        let x = self.lin.factor_solve(false, &r)?;
+        let (Some(x), false) = (x, load == 0.0) else {
             return Ok(());
-        }
+        };
         let presc = vec![[0.0; 2]; self.cur.blocks.len()];
         let el = Inputs {
             law: &self.law.elastic,
@@ -813,8 +804,7 @@ impl<'a> Dynamics<'a> {
         self.system = System::for_dynamics(self.scene, &self.cur).distributed(self.ranks);
         let pattern = self.system.plan.pattern().clone();
         self.diag = pattern.diagonal_positions();
-        self.kbuf = CsrMatrix::zeros(pattern.clone());
-        self.tbuf = None;
+        self.lin.new_pattern(pattern.clone());
         if self.cbuf.is_some() {
             self.cbuf = Some(CsrMatrix::zeros(pattern.clone()));
             self.cmat = Some(CsrMatrix::zeros(pattern));

@@ -3,6 +3,7 @@
 
 pub mod checkpoint;
 pub mod config;
+pub(crate) mod correction;
 pub mod curve;
 pub mod dynamics;
 pub mod mechanism;

@@ -18,8 +18,10 @@
 //! * the contact-state bookkeeping between iterations (the last iteration's states and
 //!   forces, the closed ↔ open changes of bonded contacts).
 //!
-//! The correction itself (secant, tangent or blended matrix, its line search and
-//! safeguards) is the problem's [`Problem::correct`].
+//! The correction itself (secant, tangent or blended matrix, and its safeguards) is the
+//! problem's [`Problem::correct`]; the linear algebra of a correction is the shared
+//! [`super::correction::CorrectionSolver`]'s, and every problem backtracks along its
+//! correction with the one line search of [`backtrack`].
 
 use super::Stats;
 use crate::material::{ContactState, History};
@@ -29,6 +31,76 @@ use crate::Result;
 /// iterations of one call of [`iterate`] breaks where they stall (closed → open → closed →
 /// open): docs/decisions/0009-breaking-cycling-bonds.md.
 pub const BOND_BREAK_FLIPS: u32 = 3;
+
+/// Step lengths 1, ½, ¼, ⅛ of the line search of an iteration on the out-of-balance norm
+/// ([`backtrack`]), static and dynamic alike.
+pub const LINE_SEARCH_STEPS: usize = 4;
+
+/// Step lengths 1 … 2⁻¹¹ of the long line searches ([`backtrack`]): the static driver's
+/// safeguard (the tangent step that replaces a secant step which does not lower the
+/// out-of-balance norm) and the arc-length corrector's backtracking. Past J4D's peak
+/// the iterations cycled with the residual halving at α = ½ and then rising 20-fold at
+/// every α down to ⅛: a brick crack that closes within 4·10⁻⁸ m of the iterate, so that a
+/// step short of its closure is 10⁻³ of the Newton step; with steps down to 2⁻¹¹ the wall
+/// follows its softening branch to the end of the push, with four it stopped at
+/// 27.5–42 % of it (docs/decisions/0027-contact-state-corrector-and-chords.md).
+pub const LONG_LINE_SEARCH_STEPS: usize = 12;
+
+/// The step a line search kept ([`backtrack`]).
+pub struct Step<T> {
+    /// The out-of-balance norm (N) at the step.
+    pub norm: f64,
+    /// The step length α.
+    pub alpha: f64,
+    /// What the problem evaluated at the step (its trial, unknowns, …).
+    pub at: T,
+    /// Whether the step kept was the last one evaluated.
+    pub last: bool,
+}
+
+/// Backtracking along a correction: the step lengths α = 1, ½, … 2^(1 − `steps`) are
+/// evaluated in turn by `eval(α)` → (out-of-balance norm, what was evaluated), `None`
+/// when the step leaves the model (then no shorter one is tried); the first whose norm
+/// is at most `rn` (N) ends the search (or the first of all, `full`: a step always
+/// taken whole), else the best of them is kept. `discard` receives what is not kept.
+/// `None` when not even the full step could be evaluated.
+pub fn backtrack<T>(
+    steps: usize,
+    rn: f64,
+    full: bool,
+    mut eval: impl FnMut(f64) -> Option<(f64, T)>,
+    mut discard: impl FnMut(T),
+) -> Option<Step<T>> {
+    let mut alpha = 1.0;
+    let mut best: Option<Step<T>> = None;
+    for _ in 0..steps {
+        let Some((norm, at)) = eval(alpha) else {
+            break;
+        };
+        let last = best.as_ref().is_none_or(|b| norm < b.norm);
+        if last {
+            let step = Step {
+                norm,
+                alpha,
+                at,
+                last,
+            };
+            if let Some(worse) = best.replace(step) {
+                discard(worse.at);
+            }
+        } else {
+            if let Some(b) = best.as_mut() {
+                b.last = false;
+            }
+            discard(at);
+        }
+        if norm <= rn || full {
+            break;
+        }
+        alpha *= 0.5;
+    }
+    best
+}
 
 /// The controls of one call of [`iterate`].
 #[derive(Debug, Clone, Copy, PartialEq)]

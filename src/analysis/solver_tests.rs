@@ -245,3 +245,53 @@ fn only_loaded_contacts_count_as_changed() {
     assert!(!changed_states(quiet, prev, 1e-3));
     assert!(changed_states(loud, prev, 1e-3));
 }
+
+/// The line search on a norm with a known minimum: ‖r(α)‖ = |α − a| + 0.1 along the
+/// correction from ‖r(0)‖ = a + 0.1.
+fn norm_at(a: f64) -> impl FnMut(f64) -> Option<(f64, f64)> {
+    move |alpha: f64| Some(((alpha - a).abs() + 0.1, alpha))
+}
+
+#[test]
+fn backtracking_takes_the_first_step_that_lowers_the_norm() {
+    // from ‖r‖ = 0.4: α = 1 gives 0.8, ½ gives 0.3 ≤ 0.4: taken
+    let mut discarded = vec![];
+    let s = backtrack(4, 0.4, false, norm_at(0.3), |a| discarded.push(a)).unwrap();
+    assert_eq!((s.alpha, s.at, s.last), (0.5, 0.5, true));
+    assert!((s.norm - 0.3).abs() < 1e-15);
+    assert_eq!(discarded, vec![1.0]);
+    // the full step is taken where it lowers the norm
+    let s = backtrack(4, 0.4, false, norm_at(0.9), drop).unwrap();
+    assert_eq!(s.alpha, 1.0);
+}
+
+#[test]
+fn backtracking_keeps_the_best_step_when_none_lowers_the_norm() {
+    // ‖r‖ = 0.05 is below the norm at every α: the best of 1, ½, ¼, ⅛ is ¼ (|¼ − 0.2|)
+    let mut tried = vec![];
+    let eval = |alpha: f64| {
+        tried.push(alpha);
+        Some(((alpha - 0.2).abs() + 0.1, alpha))
+    };
+    let s = backtrack(4, 0.05, false, eval, drop).unwrap();
+    assert_eq!(tried, vec![1.0, 0.5, 0.25, 0.125]);
+    assert_eq!(s.alpha, 0.25);
+    // it was not the last evaluated (⅛ was)
+    assert!(!s.last);
+    // twelve steps go down to 2⁻¹¹
+    let s = backtrack(12, 0.0, false, norm_at(0.0), drop).unwrap();
+    assert_eq!(s.alpha, 2f64.powi(-11));
+}
+
+#[test]
+fn backtracking_stops_where_a_step_leaves_the_model() {
+    // the full step always taken (a time step's first iteration), however it does
+    let s = backtrack(4, 0.0, true, norm_at(0.0), drop).unwrap();
+    assert_eq!(s.alpha, 1.0);
+    // the full step leaves the model: no shorter one is tried
+    let s = backtrack(4, 0.0, false, |a: f64| (a < 1.0).then_some((a, a)), drop);
+    assert!(s.is_none());
+    // a step that leaves the model after one that stayed: the one that stayed
+    let s = backtrack(4, 0.0, false, |a: f64| (a >= 0.5).then_some((a, a)), drop).unwrap();
+    assert_eq!(s.alpha, 0.5);
+}

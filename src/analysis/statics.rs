@@ -7,9 +7,12 @@
 //! the first failed increment.
 
 use super::config::{secant_local, tangent_local, Committed, Inputs, Trial};
+use super::correction::{CorrectionSolver, Held};
 use super::mechanism::{classify, Mechanism};
 use super::progress::{Increment, Progress};
-use super::solver::{self, IterationControls, OpenFlips};
+use super::solver::{
+    self, IterationControls, OpenFlips, LINE_SEARCH_STEPS, LONG_LINE_SEARCH_STEPS,
+};
 use super::{Outcome, Stats, Status};
 use crate::assembly::{loads, LocalStiffness, Ranks, System};
 use crate::geometry::polygon::Point;
@@ -76,8 +79,8 @@ pub struct Driver<'a> {
     cur: Mesh,
     committed: Committed,
     /// The linear algebra of the corrections: the backend, what it holds factorized,
-    /// the tangent LU and the matrix buffers ([`corrections::Corrections`]).
-    lin: corrections::Corrections<'a>,
+    /// the tangent LU and the matrix buffers (the shared [`CorrectionSolver`]).
+    lin: CorrectionSolver<'a>,
     /// The increment iterated is a capacity search's probe of the load factor, which
     /// stops at shorter stall windows ([`Driver::stall_window`]); the failure that closes
     /// the search's bracket is iterated again with the full ones.
@@ -174,16 +177,6 @@ struct Report {
     residual: f64,
 }
 
-/// The matrix whose factorization the main backend holds.
-#[derive(Debug, Clone, PartialEq)]
-enum Held {
-    Nothing,
-    /// The elastic stiffness of the initial configuration.
-    K0,
-    /// A secant stiffness, with the contact states it was assembled for.
-    Secant(Vec<ContactState>),
-}
-
 /// The external force along a line search ([`Driver::line_search_along`]) at the step
 /// length α.
 enum Load<'v> {
@@ -227,11 +220,6 @@ const STALL_ITERATIONS: usize = 60;
 /// (docs/decisions/0004-capacity-probe-windows.md).
 const PROBE_STALL_ITERATIONS: usize = 30;
 const PROBE_TANGENT_STALL_ITERATIONS: usize = 10;
-/// Step lengths 1, ½, ¼, ⅛ of the line search on the out-of-balance norm.
-const LINE_SEARCH_STEPS: usize = 4;
-/// Step lengths 1 … 2⁻¹¹ of the line search along the tangent step that replaces a secant
-/// step which does not lower the out-of-balance norm.
-const SAFEGUARD_STEPS: usize = 12;
 /// Fraction of the best residual an iteration must reach to count as progress.
 const STALL_PROGRESS: f64 = 0.9;
 
@@ -261,19 +249,12 @@ impl<'a> Driver<'a> {
     ) -> Result<Driver<'a>> {
         let settings = scene.analysis.settings.statics()?.clone();
         let system = System::new(scene, mesh).distributed(ranks);
+        let pattern = system.plan.pattern().clone();
         // a failed factorization only says "singular" here: no LDLᵀ for its pivot's value
         backend.set_failed_pivot_value(false);
         let law = PerContact::of_scene(scene, mesh);
         let t = scene.model.thickness;
         let area = mesh.contacts.iter().map(|c| c.length * t).collect();
-        let kbuf = CsrMatrix::zeros(system.plan.pattern().clone());
-        // no values until the first correction across a change of state needs them
-        // (`near_into_aux`): most runs never do, and on the 10⁶-unknown wall they are
-        // as large as the matrix's
-        let aux = CsrMatrix {
-            pattern: kbuf.pattern.clone(),
-            values: Vec::new(),
-        };
         Ok(Driver {
             scene,
             settings,
@@ -285,19 +266,7 @@ impl<'a> Driver<'a> {
                 Some(f) => Committed::in_situ(mesh, f, scene.model.thickness),
                 None => Committed::zero(mesh),
             },
-            lin: corrections::Corrections {
-                backend,
-                lu: None,
-                held: Held::Nothing,
-                kbuf,
-                kbuf_local: None,
-                aux,
-                aux_local: None,
-                held_current: false,
-                held_on_cur: Vec::new(),
-                gmres_failed: false,
-                k0: None,
-            },
+            lin: CorrectionSolver::new(backend, pattern),
             probing: false,
             converged_norm: 0.0,
             scale_floor: 0.0,
@@ -441,12 +410,6 @@ impl<'a> Driver<'a> {
         self.local_of(&trial.force, states, newton)
     }
 
-    /// The contacts' secant local stiffness matrices (N/m) in the given states (those of
-    /// [`Driver::local_stiffness`] without `newton`, which need no trial).
-    fn secant_local(&self, states: &[ContactState]) -> Vec<LocalStiffness> {
-        self.local_of(&[], states, false)
-    }
-
     /// [`Driver::local_stiffness`] with the contact forces `force` (N; read for the sign of
     /// the shear force when `newton`).
     fn local_of(
@@ -455,27 +418,7 @@ impl<'a> Driver<'a> {
         states: &[ContactState],
         newton: bool,
     ) -> Vec<LocalStiffness> {
-        (0..self.area.len())
-            .map(|k| {
-                let law = self.law.get(k);
-                let s = law.springs(self.area[k]);
-                if self
-                    .flips
-                    .get(k)
-                    .is_some_and(|&n| n >= arc_length::FLIP_LIMIT)
-                {
-                    // a contact that keeps changing state at the kink of its law keeps its
-                    // elastic springs: they bound every tangent of the law, so the
-                    // iterations contract to the state at the kink instead of cycling
-                    return [[s.kn, 0.0], [0.0, s.ks]];
-                }
-                if newton {
-                    tangent_local(s, states[k], force[k][1], law.tan_phi())
-                } else {
-                    secant_local(s, states[k])
-                }
-            })
-            .collect()
+        corrections::contact_local(&self.law, &self.area, &self.flips, force, states, newton)
     }
 
     fn elastic_local(&self) -> Vec<LocalStiffness> {
@@ -667,14 +610,7 @@ impl<'a> Driver<'a> {
         self.committed.history = trial.history;
         let old = std::mem::replace(&mut self.cur, trial.mesh);
         self.keep_spare(old);
-        self.lin.k0 = None;
-        self.lin.kbuf_local = None;
-        self.lin.aux_local = None;
-        // a held secant factorization is now of an older geometry: across increments it
-        // preconditions (Driver::reuse) with the change of state corrected
-        self.lin.held_current = false;
-        self.lin.held_on_cur.clear();
-        self.lin.gmres_failed = false;
+        self.lin.moved();
         for (t, p) in self.presc_total.iter_mut().zip(presc) {
             t[0] += p[0];
             t[1] += p[1];

@@ -63,7 +63,7 @@ pub fn solve_with_factor(
 /// ([`LinearBackend::solve_changed`]; `near`: a symmetric positive definite matrix that
 /// differs from the factorized one on few contacts, close to `k`). Across load increments
 /// `k` is the secant matrix on the new geometry and `near` the held one with the contacts
-/// that changed state since corrected (`Driver::reuse` in src/analysis/statics.rs):
+/// that changed state since corrected (`CorrectionSolver::reuse` in src/analysis/correction.rs):
 /// K near⁻¹ differs from the identity by the geometry's small change only. `None` when
 /// the backend refuses the change (its first call, which makes the correction; later
 /// calls reuse it) or as [`solve_with_factor`].

@@ -68,7 +68,7 @@ pub fn run_from(
         }
     };
     let counted = |d: &Dynamics| -> Stats {
-        let bs = d.backend.stats();
+        let bs = d.lin.backend.stats();
         let mut s = d.stats.clone();
         s.factorizations = before.factorizations + bs.numeric_factorizations;
         s.symbolic_factorizations = before.symbolic_factorizations + bs.symbolic_factorizations;

@@ -4,6 +4,7 @@
 //! on its factorization, and the line search (docs/theory.md §5).
 
 use super::*;
+use crate::analysis::correction::Buffer;
 
 impl Dynamics<'_> {
     /// The out-of-balance force of a trial increment `dq` of a step (docs/theory.md §5, the
@@ -50,9 +51,9 @@ impl Dynamics<'_> {
                 .map(|c| self.rayleigh_local(c, trial.state[c]))
                 .collect();
             self.system
-                .stiffness_into(&trial.mesh, &local, &mut self.kbuf);
+                .stiffness_into(&trial.mesh, &local, &mut self.lin.kbuf);
             let mut kv = vec![0.0; n];
-            self.kbuf.mul_vec(&v1r, &mut kv);
+            self.lin.kbuf.mul_vec(&v1r, &mut kv);
             for (f, x) in fv1.iter_mut().zip(&kv) {
                 *f += ra1 * x;
             }
@@ -202,7 +203,7 @@ impl Dynamics<'_> {
     /// of `secant`, which carry the anti-chatter weights), solved by GMRES preconditioned
     /// with the backend's factorization of the secant effective matrix (an inexact Newton
     /// step, to a tenth of the tolerance, as the static driver's). `None` when GMRES does
-    /// not converge within [`TANGENT_MAX_ITERATIONS`] or the step leaves the model.
+    /// not converge within `TANGENT_MAX_ITERATIONS` or the step leaves the model.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn tangent_step(
         &mut self,
@@ -235,20 +236,18 @@ impl Dynamics<'_> {
         self.effective_into(blocks, &trial.mesh, &local, &trial.state, terms, true);
         let tolerance =
             (0.1 * self.settings.tolerance * bal.scale / bal.rn.max(1e-300)).clamp(1e-10, 1e-3);
-        let out = crate::solve::reuse::gmres_with_factor(
-            self.tbuf.as_ref().expect("assembled above"),
-            &mut *self.backend,
+        let x = self.lin.gmres(
+            Buffer::Aux,
+            false,
             &bal.r,
             tolerance,
-            TANGENT_MAX_ITERATIONS,
+            f64::INFINITY,
+            &mut self.stats,
         )?;
-        self.stats.reused_factorizations += 1;
-        self.stats.reuse_iterations += out.iterations;
-        let step = self.search(terms, dq, &out.x, bal, it, frozen, dug, size);
+        let step = self.search(terms, dq, &x, bal, it, frozen, dug, size);
         if crate::analysis::tracing() {
             eprintln!(
-                "  tangent step: GMRES {} iterations, ratio {:.3}",
-                out.iterations,
+                "  tangent step: ratio {:.3}",
                 step.as_ref().map_or(f64::NAN, |s| s.2.rn / bal.rn)
             );
         }
@@ -342,8 +341,8 @@ impl Dynamics<'_> {
 
     /// The step's effective matrix (1−α_m) c₀ M + (1−α_f) c₁ C + (1−α_f) K for the
     /// contacts' local stiffnesses `local` (K with its Rayleigh damping,
-    /// (1−α_f) c₁ a₁ K) and C of the dashpots in the trial states `state`, into `kbuf`;
-    /// into `tbuf` when `second` (the tangent's, with the C of the `kbuf` built before
+    /// (1−α_f) c₁ a₁ K) and C of the dashpots in the trial states `state`, into the
+    /// correction solver's `kbuf`; into its `aux` when `second` (the tangent's, with the C of the `kbuf` built before
     /// it in the same iteration).
     ///
     /// The contacts in the trial's geometry `contacts`, the blocks' triangles (and their
@@ -387,10 +386,9 @@ impl Dynamics<'_> {
             local
         };
         let out = if second {
-            self.tbuf
-                .get_or_insert_with(|| CsrMatrix::zeros(self.kbuf.pattern.clone()))
+            self.lin.aux_values()
         } else {
-            &mut self.kbuf
+            &mut self.lin.kbuf
         };
         let blocks = blocks.unwrap_or(&self.cur);
         self.system
@@ -412,9 +410,9 @@ impl Dynamics<'_> {
             }
         }
         let out = if second {
-            self.tbuf.as_mut().expect("allocated above")
+            &mut self.lin.aux
         } else {
-            &mut self.kbuf
+            &mut self.lin.kbuf
         };
         let kf = (1.0 - af) * (1.0 + c1 * ra1);
         let mf = (1.0 - am) * c0 + (1.0 - af) * c1 * ra0;
@@ -431,7 +429,8 @@ impl Dynamics<'_> {
         }
     }
 
-    /// Backtracking along the correction `x` from `dq` on the out-of-balance norm: where
+    /// Backtracking along the correction `x` from `dq` on the out-of-balance norm
+    /// ([`solver::backtrack`]): where
     /// the full step overshoots (a contact cycling between its open and closed
     /// linearizations, each of which carries the iterate past the kink of the law), a
     /// shorter one lands near the kink. Returns the best of the tried steps: its unknowns,
@@ -450,30 +449,21 @@ impl Dynamics<'_> {
         dug: [f64; 2],
         size: f64,
     ) -> Option<(Vec<f64>, Trial, Balance, bool)> {
-        let mut best: Option<(Vec<f64>, Trial, Balance)> = None;
-        let mut best_is_last = false;
-        let mut alpha = 1.0;
-        for _ in 0..LINE_SEARCH_STEPS {
+        // the first iteration's residual is that of the committed state, before any
+        // inertia: its full step is the linearized step, always taken
+        let eval = |alpha: f64| {
             let cand: Vec<f64> = dq.iter().zip(x).map(|(d, x)| d + alpha * x).collect();
             let dmax = cand.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             if !dmax.is_finite() || dmax > 0.5 * size {
-                break;
+                return None;
             }
             let mut t = self.trial_moving(&cand, dug);
             hold_open(&mut t, frozen);
             let b = self.balance(terms, &cand, &t);
-            let decreased = b.rn <= bal.rn;
-            best_is_last = best.as_ref().is_none_or(|(_, _, bb)| b.rn < bb.rn);
-            if best_is_last {
-                best = Some((cand, t, b));
-            }
-            // the first iteration's residual is that of the committed state, before any
-            // inertia: its full step is the linearized step, always taken
-            if decreased || it == 0 {
-                break;
-            }
-            alpha *= 0.5;
-        }
-        best.map(|(c, t, b)| (c, t, b, best_is_last))
+            Some((b.rn, (cand, t, b)))
+        };
+        let best = solver::backtrack(LINE_SEARCH_STEPS, bal.rn, it == 0, eval, drop)?;
+        let (c, t, b) = best.at;
+        Some((c, t, b, best.last))
     }
 }

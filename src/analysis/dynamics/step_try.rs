@@ -247,7 +247,7 @@ impl Problem for StepTry<'_, '_> {
             &self.terms,
             false,
         );
-        if d.backend.factorize(&d.kbuf).is_err() {
+        if !d.lin.factorize(false) {
             return Ok(Flow::Stop);
         }
         let (frozen, terms, dq, dug, size) =
@@ -266,7 +266,7 @@ impl Problem for StepTry<'_, '_> {
             Some(step) => Some(step),
             None => {
                 let mut x = bal.r.clone();
-                if d.backend.solve(&mut x).is_err() || !x.iter().all(|v| v.is_finite()) {
+                if !d.lin.solve(&mut x) {
                     return Ok(Flow::Stop);
                 }
                 d.search(terms, dq, &x, bal, it, frozen, dug, size)

@@ -130,17 +130,6 @@ const PREDICTOR_LEAST_SCALE: f64 = 1.0 / 4096.0;
 /// of the model.
 const SWITCH_FRACTION: f64 = 0.1;
 
-/// The steps α = 1, ½, …, 2¹⁻ⁿ of the backtracking of a correction
-/// ([`Driver::backtrack`]), n this constant: the first that does not raise the
-/// out-of-balance force is taken, else the best of them. Past J4D's peak
-/// (docs/decisions/0027-contact-state-corrector-and-chords.md) the iterations cycled with the residual
-/// halving at α = ½ for six iterations and then rising 20-fold at every α down to ⅛: a
-/// brick crack (kₙ ≈ 2·10¹² N/m for a 26 mm contact) that closes within 4·10⁻⁸ m of the
-/// iterate, so that a step short of its closure is 10⁻³ of the Newton step. With the
-/// steps down to 2⁻¹¹ the wall follows its softening branch to the end of the push (with
-/// four it stopped at 27.5–42 % of it, main at 43 %).
-const BACKTRACK_STEPS: usize = 12;
-
 /// The failed checks of Eq. F2 in a row, each with the true laws' out-of-balance force
 /// within [`CHECK_SAME`] of the one before, after which the increment has failed: the
 /// chords (Eq. F1) to a point where the frozen laws converge can lead back to that point
@@ -452,13 +441,9 @@ impl Driver<'_> {
             self.system
                 .stiffness_into(&trial.mesh, &local, &mut self.lin.kbuf);
             self.lin.kbuf_local = None;
-            Self::pin_rows(&self.pins, &mut self.lin.kbuf);
+            CorrectionSolver::pin_rows(&self.pins, &mut self.lin.kbuf);
             let size = self.model_size();
-            let lu = corrections::tangent_lu(&mut self.lin.lu, self.lin.backend.name())?;
-            let ok = lu.factorize(&self.lin.kbuf).is_ok()
-                && lu.solve(&mut x1).is_ok()
-                && lu.solve(&mut x2).is_ok()
-                && x1.iter().chain(&x2).all(|v| v.is_finite())
+            let ok = self.lin.factor_solve_each(true, &mut [&mut x1, &mut x2])?
                 // LU has no pivot measure: a singular tangent shows as a huge response
                 && x2.iter().all(|v| v.abs() < 1e3 * size);
             return Ok(ok.then_some((x1, x2)));
@@ -467,20 +452,15 @@ impl Driver<'_> {
         self.system
             .stiffness_into(&trial.mesh, &local, &mut self.lin.kbuf);
         self.lin.kbuf_local = None;
-        Self::pin_rows(&self.pins, &mut self.lin.kbuf);
-        self.lin.held = Held::Nothing;
-        let ok = self.lin.backend.factorize(&self.lin.kbuf).is_ok()
-            && !super::super::singular_pivots(&*self.lin.backend);
-        if !ok {
+        CorrectionSolver::pin_rows(&self.pins, &mut self.lin.kbuf);
+        if !self.lin.factorize(true) {
             let Some(x1) = self.blended_step(trial, b1, BLEND)? else {
                 return Ok(None);
             };
             // the blended matrix is still factorized
             return Ok(self.lin.backend.solve(&mut x2).is_ok().then_some((x1, x2)));
         }
-        let ok = self.lin.backend.solve(&mut x1).is_ok()
-            && self.lin.backend.solve(&mut x2).is_ok()
-            && x1.iter().chain(&x2).all(|v| v.is_finite());
+        let ok = self.lin.solve(&mut x1) && self.lin.solve(&mut x2);
         Ok(ok.then_some((x1, x2)))
     }
 
@@ -489,7 +469,7 @@ impl Driver<'_> {
     /// matrix, δλ from the constraint — on the cylinder ‖dq + δu_r + δλ δu_P‖² = n Δl²
     /// the root that turns the increment least, on the dissipation the root of Eq. A2
     /// along the line ([`Driver::dissipation_root`]) — and backtracking (the best of the
-    /// steps 1, ½, …, 2⁻¹¹ of [`BACKTRACK_STEPS`] where the full one raises the
+    /// steps 1, ½, …, 2⁻¹¹ of [`LONG_LINE_SEARCH_STEPS`] where the full one raises the
     /// out-of-balance force). Returns (the norm of the
     /// out-of-balance force after it, the new dq, its δλ, its trial), or `None` when the matrix
     /// cannot be factorized or the line meets no point of the cylinder.
@@ -553,7 +533,7 @@ impl Driver<'_> {
         Ok(Some(self.backtrack(&w, &dp, dl, rn, (p, base), dq, lam)))
     }
 
-    /// The best of the steps α = 1, ½, …, 2⁻¹¹ ([`BACKTRACK_STEPS`]) from `dq` towards
+    /// The best of the steps α = 1, ½, …, 2⁻¹¹ ([`LONG_LINE_SEARCH_STEPS`]) from `dq` towards
     /// `w` + δλ `dp` at the load factor `lam` + α δλ (the first that does not raise the
     /// out-of-balance force above `rn`; [`Driver::line_search_along`]): (its
     /// out-of-balance force, the iterate, α δλ, the iterate's trial).
@@ -582,7 +562,7 @@ impl Driver<'_> {
             dlam: dl,
         };
         let (rn2, t, cand, alpha) =
-            self.line_search_along(dq, &delta, rn, &load, &zero, BACKTRACK_STEPS);
+            self.line_search_along(dq, &delta, rn, &load, &zero, LONG_LINE_SEARCH_STEPS);
         (rn2, cand, alpha * dl, t)
     }
 

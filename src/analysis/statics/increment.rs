@@ -275,16 +275,11 @@ impl Problem for Increment<'_, '_> {
             // the secant step instead
             let local = d.local_stiffness(&self.trial, &self.trial.state, false);
             d.assemble_kbuf(local);
-            let mut x = r.clone();
-            let ok = d.lin.backend.factorize(&d.lin.kbuf).is_ok()
-                && !super::super::singular_pivots(&*d.lin.backend)
-                && d.lin.backend.solve(&mut x).is_ok()
-                && x.iter().all(|v| v.is_finite());
-            d.hold_secant(&self.trial.state);
-            let x = if ok {
-                Some(x)
-            } else {
-                d.blended_step(&self.trial, r, BLEND)?
+            let x = d.lin.factor_solve(false, r)?;
+            d.lin.hold_secant(&self.trial.state);
+            let x = match x {
+                Some(x) => Some(x),
+                None => d.blended_step(&self.trial, r, BLEND)?,
             };
             if let Some(x) = x {
                 let alt = d.line_search(dq, &x, rn, f_ext, presc, LINE_SEARCH_STEPS);
@@ -304,7 +299,7 @@ impl Problem for Increment<'_, '_> {
                 // the tangent of the current states is the Jacobian where no contact sits
                 // at a kink of its law, so a short enough step along it lowers the norm:
                 // backtrack further than for the secant step
-                let alt = d.line_search(dq, &x, rn, f_ext, presc, SAFEGUARD_STEPS);
+                let alt = d.line_search(dq, &x, rn, f_ext, presc, LONG_LINE_SEARCH_STEPS);
                 if super::super::tracing() {
                     eprintln!("  safeguard tangent ratio {:.3}", alt.0 / rn);
                 }

@@ -281,27 +281,16 @@ fn finish(
     mech: Option<Mechanism>,
 ) -> Outcome {
     let bs = d.lin.backend.stats();
-    d.stats.factorizations = bs.numeric_factorizations
-        + d.lin
-            .lu
-            .as_ref()
-            .map_or(0, |l| l.stats().numeric_factorizations);
-    d.stats.tangent_factorizations = d
-        .lin
-        .lu
-        .as_ref()
-        .map_or(0, |l| l.stats().numeric_factorizations);
-    d.stats.symbolic_factorizations = bs.symbolic_factorizations
-        + d.lin
-            .lu
-            .as_ref()
-            .map_or(0, |l| l.stats().symbolic_factorizations);
+    let lu = d.lin.tangent_stats().unwrap_or_default();
+    d.stats.factorizations = bs.numeric_factorizations + lu.numeric_factorizations;
+    d.stats.tangent_factorizations = lu.numeric_factorizations;
+    d.stats.symbolic_factorizations = bs.symbolic_factorizations + lu.symbolic_factorizations;
     d.stats.min_pivot_ratio = bs.min_pivot_ratio;
     d.stats.wall_time_s = start.elapsed().as_secs_f64();
     if crate::analysis::tracing() {
         eprintln!("solver {bs:?}");
-        if let Some(l) = d.lin.lu.as_ref() {
-            eprintln!("solver (tangent LU) {:?}", l.stats());
+        if let Some(l) = d.lin.tangent_stats() {
+            eprintln!("solver (tangent LU) {l:?}");
         }
         eprintln!("analysis {} s", d.stats.wall_time_s);
     }

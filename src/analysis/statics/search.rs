@@ -112,25 +112,15 @@ impl Driver<'_> {
         presc: &[Point],
         steps: usize,
     ) -> (f64, Trial, Vec<f64>, f64) {
-        let mut alpha = 1.0;
-        let mut best: Option<(f64, Trial, Vec<f64>, f64)> = None;
-        for _ in 0..steps {
+        let eval = |alpha: f64| {
             let cand: Vec<f64> = dq.iter().zip(delta).map(|(a, b)| a + alpha * b).collect();
             let t = self.trial(&cand, presc);
             let rn2 = Self::norm(&self.out_of_balance(&load.at(alpha), &t.f_int));
-            if best.as_ref().is_none_or(|b| rn2 < b.0) {
-                if let Some(worse) = best.replace((rn2, t, cand, alpha)) {
-                    self.recycle(worse.1);
-                }
-            } else {
-                self.recycle(t);
-            }
-            if rn2 <= rn {
-                break;
-            }
-            alpha *= 0.5;
-        }
-        best.expect("at least one step is tried")
+            Some((rn2, (t, cand)))
+        };
+        let best = solver::backtrack(steps, rn, false, eval, |(t, _)| self.recycle(t))
+            .expect("the full step is always evaluated");
+        (best.norm, best.at.0, best.at.1, best.alpha)
     }
 
     /// The unknowns of each block (m, rad): a rigid block's three, a deformable block's

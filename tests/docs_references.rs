@@ -119,6 +119,47 @@ fn performance_page_is_a_reference_not_a_notebook() {
     report("docs/performance.md", &problems);
 }
 
+/// Every block of docs/performance.md that benches/performance.py writes is closed, and
+/// names a section the script has (its `SECTIONS` table): a renamed section leaves no
+/// block that the script can no longer regenerate.
+#[test]
+fn performance_blocks_name_sections_of_the_script() {
+    let doc = fs::read_to_string(root().join("docs/performance.md")).expect("docs/performance.md");
+    let script =
+        fs::read_to_string(root().join("benches/performance.py")).expect("benches/performance.py");
+    let table = script
+        .lines()
+        .find(|l| l.starts_with("SECTIONS = {"))
+        .expect("the script's SECTIONS table");
+    let mut problems = Vec::new();
+    let mut blocks = 0;
+    for (i, line) in doc.lines().enumerate() {
+        let Some(name) = line
+            .strip_prefix("<!-- performance.py ")
+            .and_then(|r| r.strip_suffix(" -->"))
+        else {
+            continue;
+        };
+        blocks += 1;
+        if !table.contains(&format!("\"{name}\":")) {
+            problems.push(format!(
+                "docs/performance.md:{}: section `{name}` is not in benches/performance.py",
+                i + 1
+            ));
+        }
+        if !doc.contains(&format!("<!-- end performance.py {name} -->")) {
+            problems.push(format!(
+                "docs/performance.md:{}: block `{name}` is not closed",
+                i + 1
+            ));
+        }
+    }
+    if blocks == 0 {
+        problems.push("docs/performance.md: no block written by benches/performance.py".into());
+    }
+    report("docs/performance.md blocks", &problems);
+}
+
 /// Characters of a path inside the repository.
 fn path_char(c: char) -> bool {
     c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | '/')

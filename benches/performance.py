@@ -1,0 +1,220 @@
+#!/usr/bin/env python3
+"""Measure the figures of docs/performance.md and write them into it.
+
+Each section of docs/performance.md that this script measures sits between the markers
+
+    <!-- performance.py SECTION -->
+    ...
+    <!-- end performance.py SECTION -->
+
+and `--write` replaces what is between them with a fresh table: the figures, the command
+that gives them, the machine (cores, CPU), the load average before and after, and the
+date. Without `--write` the tables are printed. Wall times are dfem's own `wall_time_s`
+(summary.json), so that start-up and output are not in them; counts (iterations,
+factorizations) do not depend on the load, wall times do: run it on a quiet machine
+(`uptime` near 0) and nothing else beside it.
+
+    python3 benches/performance.py capacity --write
+    python3 benches/performance.py layer --old /path/to/old/dfem --rounds 5 --write
+
+Sections:
+  capacity  capacity searches against the gravity-only analysis of the same wall
+  layer     a new binary against an old one (alternated, paired ratios) on the
+            scenes of every analysis type: the cost of a change to the analysis layer
+"""
+
+import argparse
+import datetime
+import json
+import os
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DOC = os.path.join(ROOT, "docs", "performance.md")
+
+# The issue-45 wall: 40 courses of 14 bricks 0.22 m x 0.075 m (3.08 m x 3 m), the
+# built-in wall's joints and materials (benches/scenes/capacity_wall40x14.toml).
+WALL = os.path.join(ROOT, "benches", "scenes", "capacity_wall40x14.toml")
+
+
+def machine():
+    cpu = "unknown CPU"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{os.cpu_count()} cores, {cpu}"
+
+
+def load():
+    return os.getloadavg()[0]
+
+
+def variant(path, changes):
+    """The scene at `path` with the values of `changes` ({(table, key): value}) in place
+    of the scene's, written to a temporary file."""
+    lines = open(path).read().split("\n")
+    for (table, key), value in changes.items():
+        inside, done = False, False
+        for i, line in enumerate(lines):
+            if line.startswith("["):
+                inside = line.strip("[] ") == table
+            elif inside and re.match(rf"{key}\s*=", line):
+                lines[i] = f"{key} = {value}"
+                done = True
+                break
+        if not done:
+            sys.exit(f"{path}: no `{key} =` in [{table}] to change")
+    f = tempfile.NamedTemporaryFile("w", suffix=".toml", delete=False)
+    f.write("\n".join(lines))
+    f.close()
+    return f.name
+
+
+def run(dfem, scene, threads=2):
+    """Run dfem on `scene`; its summary.json."""
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [dfem, "run", scene, "--out", out, "--no-plots", "--quiet", "--threads", str(threads)]
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        path = os.path.join(out, "summary.json")
+        if not os.path.exists(path):
+            sys.exit(f"{' '.join(cmd)} wrote no summary (exit {p.returncode}):\n{p.stderr}")
+        return json.load(open(path))
+
+
+def header(command, loads):
+    date = datetime.date.today().isoformat()
+    return (
+        f"Measured {date} by `{command}` on {machine()}; load average "
+        f"{min(loads):.2f}–{max(loads):.2f} during the run. Release build."
+    )
+
+
+def section_capacity(args):
+    """λ, the counts and the time of a capacity search on the 40 × 14 wall, rigid and
+    deformable, against the same wall's gravity-only analysis, each the median of
+    `rounds` runs alternated."""
+    rows = []
+    loads = [load()]
+    for kind in ("rigid", "deformable"):
+        cap = variant(WALL, {("generate", "kind"): f'"{kind}"'})
+        grav = variant(WALL, {("generate", "kind"): f'"{kind}"', ("analysis", "type"): '"static"'})
+        tc, tg, s = [], [], None
+        for _ in range(args.rounds):
+            s = run(args.dfem, cap)
+            tc.append(s["stats"]["wall_time_s"])
+            g = run(args.dfem, grav)
+            tg.append(g["stats"]["wall_time_s"])
+            loads.append(load())
+        st = s["stats"]
+        c, g = statistics.median(tc), statistics.median(tg)
+        lam = s["load_factor"]
+        rows.append(
+            f"| {kind} | {s['status']} | {lam:.4f} | {st['increments']} | {st['iterations']:,} "
+            f"| {st['factorizations']:,} ({st.get('tangent_factorizations', 0):,} tangent LU) "
+            f"| {c:.2f} s | {g:.3f} s | {c / g:,.0f}× |"
+            if lam is not None
+            else f"| {kind} | {s['status']} | – | {st['increments']} | {st['iterations']:,} "
+            f"| {st['factorizations']:,} | {c:.2f} s | {g:.3f} s | {c / g:,.0f}× |"
+        )
+        os.unlink(cap)
+        os.unlink(grav)
+    out = [
+        header(f"python3 benches/performance.py capacity --rounds {args.rounds}", loads),
+        "",
+        "| blocks | status | λ | increments | iterations | numeric factorizations | capacity run | gravity-only run | ratio |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
+        *rows,
+    ]
+    return "\n".join(out)
+
+
+LAYER_SCENES = [
+    ("P2 rigid", "benches/scenes/p2_wall40_rigid.toml", {}),
+    ("P2 deformable", "benches/scenes/p2_wall40_deformable.toml", {}),
+    ("40 × 14 wall, rigid, capacity", "benches/scenes/capacity_wall40x14.toml", {}),
+    ("tunnel earthquake (3 s)", "examples/tunnel_earthquake/earthquake.toml", {}),
+]
+
+
+def section_layer(args):
+    """The new binary against `--old`: each scene run by both, alternated, `rounds`
+    times; the median time of each and the median of the paired ratios new / old, with
+    a check that both give the same status, load factor and iterations."""
+    if not args.old:
+        sys.exit("layer: give the binary to compare with, --old PATH")
+    rows = []
+    loads = [load()]
+    for name, scene, _ in LAYER_SCENES:
+        path = os.path.join(ROOT, scene)
+        old, new, ratio = [], [], []
+        same = True
+        for _ in range(args.rounds):
+            a = run(args.old, path)
+            b = run(args.dfem, path)
+            loads.append(load())
+            old.append(a["stats"]["wall_time_s"])
+            new.append(b["stats"]["wall_time_s"])
+            ratio.append(new[-1] / old[-1])
+            keys = ("status", "load_factor")
+            same &= all(a[k] == b[k] for k in keys)
+            same &= a["stats"]["iterations"] == b["stats"]["iterations"]
+        rows.append(
+            f"| {name} (`{scene}`) | {statistics.median(old):.2f} s | {statistics.median(new):.2f} s "
+            f"| {statistics.median(ratio):.2f} ({min(ratio):.2f}–{max(ratio):.2f}) "
+            f"| {'same' if same else '**differ**'} |"
+        )
+    out = [
+        header(f"python3 benches/performance.py layer --old OLD --rounds {args.rounds}", loads),
+        "",
+        "| scene | old, median | new, median | new / old (paired, median; range) | status, λ, iterations |",
+        "|---|---:|---:|---|---|",
+        *rows,
+    ]
+    return "\n".join(out)
+
+
+SECTIONS = {"capacity": section_capacity, "layer": section_layer}
+
+
+def write(name, table):
+    text = open(DOC).read()
+    begin, end = f"<!-- performance.py {name} -->", f"<!-- end performance.py {name} -->"
+    if begin not in text or end not in text:
+        sys.exit(f"{DOC}: no markers for section `{name}` ({begin} … {end})")
+    i = text.index(begin) + len(begin)
+    j = text.index(end)
+    text = text[:i] + "\n" + table + "\n" + text[j:]
+    with open(DOC + ".tmp", "w") as f:
+        f.write(text)
+    os.replace(DOC + ".tmp", DOC)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("sections", nargs="+", choices=sorted(SECTIONS))
+    p.add_argument("--dfem", default=os.path.join(ROOT, "target", "release", "dfem"))
+    p.add_argument("--old", help="the binary to compare with (section layer)")
+    p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--write", action="store_true", help="write the tables into docs/performance.md")
+    args = p.parse_args()
+    if not os.path.exists(args.dfem):
+        sys.exit(f"{args.dfem}: no binary (cargo build --release first, or --dfem PATH)")
+    for name in args.sections:
+        table = SECTIONS[name](args)
+        if args.write:
+            write(name, table)
+            print(f"docs/performance.md: section {name} written")
+        else:
+            print(table)
+
+
+if __name__ == "__main__":
+    main()

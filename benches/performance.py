@@ -89,11 +89,19 @@ def run(dfem, scene, threads=2):
         return json.load(open(path))
 
 
-def header(command, loads):
+def table(arguments, loads, columns, align, rows):
+    """A measured table: what measured it (`benches/performance.py arguments`), where,
+    under which load, and its rows under `columns` aligned by `align`."""
     date = datetime.date.today().isoformat()
-    return (
-        f"Measured {date} by `{command}` on {machine()}; load average "
-        f"{min(loads):.2f}–{max(loads):.2f} during the run. Release build."
+    return "\n".join(
+        [
+            f"Measured {date} by `python3 benches/performance.py {arguments}` on {machine()}; "
+            f"load average {min(loads):.2f}–{max(loads):.2f} during the run. Release build.",
+            "",
+            f"| {columns} |",
+            f"|{align}",
+            *rows,
+        ]
     )
 
 
@@ -126,14 +134,8 @@ def section_capacity(args):
         )
         os.unlink(cap)
         os.unlink(grav)
-    out = [
-        header(f"python3 benches/performance.py capacity --rounds {args.rounds}", loads),
-        "",
-        "| blocks | status | λ | increments | iterations | numeric factorizations | capacity run | gravity-only run | ratio |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
-        *rows,
-    ]
-    return "\n".join(out)
+    columns = "blocks | status | λ | increments | iterations | numeric factorizations | capacity run | gravity-only run | ratio"
+    return table(f"capacity --rounds {args.rounds}", loads, columns, "---|---|" + "---:|" * 7, rows)
 
 
 LAYER_SCENES = [
@@ -171,14 +173,8 @@ def section_layer(args):
             f"| {statistics.median(ratio):.2f} ({min(ratio):.2f}–{max(ratio):.2f}) "
             f"| {'same' if same else '**differ**'} |"
         )
-    out = [
-        header(f"python3 benches/performance.py layer --old OLD --rounds {args.rounds}", loads),
-        "",
-        "| scene | old, median | new, median | new / old (paired, median; range) | status, λ, iterations |",
-        "|---|---:|---:|---|---|",
-        *rows,
-    ]
-    return "\n".join(out)
+    columns = "scene | old, median | new, median | new / old (paired, median; range) | status, λ, iterations"
+    return table(f"layer --old OLD --rounds {args.rounds}", loads, columns, "---|---:|---:|---|---|", rows)
 
 
 SECTIONS = {"capacity": section_capacity, "layer": section_layer}

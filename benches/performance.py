@@ -21,6 +21,8 @@ Sections:
   capacity  capacity searches against the gravity-only analysis of the same wall
   layer     a new binary against an old one (alternated, paired ratios) on the
             scenes of every analysis type: the cost of a change to the analysis layer
+  p2        the P2 wall (40 x 40 blocks, gravity then 0.3 g) against OpenSees
+            (benches/peers/wall_static.py; --python names an interpreter with openseespy)
 """
 
 import argparse
@@ -177,7 +179,40 @@ def section_layer(args):
     return table(f"layer --old OLD --rounds {args.rounds}", loads, columns, "---|---:|---:|---|---|", rows)
 
 
-SECTIONS = {"capacity": section_capacity, "layer": section_layer}
+def section_p2(args):
+    """dfem on the P2 scenes against OpenSees (openseespy, MUMPS, Newton) on the same wall,
+    alternated, `rounds` times: the medians and the ratio of the medians. OpenSees' time
+    is its `total_s` (model building included, as dfem's `wall_time_s` includes meshing
+    and contact detection)."""
+    peer = os.path.join(ROOT, "benches", "peers", "wall_static.py")
+    opensees = [args.python, peer, "40", "40", "--system", "Mumps", "--lat", "0.3", "--nlat", "30", "--ngrav", "5"]
+    rows = []
+    loads = [load()]
+    for kind in ("rigid", "deformable"):
+        scene = os.path.join(ROOT, "benches", "scenes", f"p2_wall40_{kind}.toml")
+        ours, theirs, s = [], [], None
+        for _ in range(args.rounds):
+            s = run(args.dfem, scene)
+            ours.append(s["stats"]["wall_time_s"])
+            p = subprocess.run(opensees, capture_output=True, text=True)
+            if p.returncode != 0:
+                sys.exit(f"{' '.join(opensees)} failed:\n{p.stderr[-2000:]}")
+            o = json.loads(p.stdout.strip().splitlines()[-1])
+            if not o.get("lateral_ok"):
+                sys.exit(f"OpenSees did not reach 0.3 g: {o}")
+            theirs.append(o["total_s"])
+            loads.append(load())
+        st = s["stats"]
+        a, b = statistics.median(ours), statistics.median(theirs)
+        rows.append(
+            f"| {kind} | {s['status']}: {st['iterations']} iterations, {st['factorizations']} factorizations, "
+            f"{st.get('low_rank_corrections', 0)} low-rank corrections | {a:.2f} s | {b:.2f} s | **{b / a:.1f}×** |"
+        )
+    columns = "wall | dfem | dfem, median | OpenSees, median | OpenSees / dfem"
+    return table(f"p2 --rounds {args.rounds}", loads, columns, "---|---|---:|---:|---:|", rows)
+
+
+SECTIONS = {"capacity": section_capacity, "layer": section_layer, "p2": section_p2}
 
 
 def write(name, table):
@@ -199,6 +234,7 @@ def main():
     p.add_argument("--dfem", default=os.path.join(ROOT, "target", "release", "dfem"))
     p.add_argument("--old", help="the binary to compare with (section layer)")
     p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--python", default=sys.executable, help="a Python with openseespy (section p2)")
     p.add_argument("--write", action="store_true", help="write the tables into docs/performance.md")
     args = p.parse_args()
     if not os.path.exists(args.dfem):

@@ -37,13 +37,8 @@ pub const BOND_BREAK_FLIPS: u32 = 3;
 pub const LINE_SEARCH_STEPS: usize = 4;
 
 /// Step lengths 1 … 2⁻¹¹ of the long line searches ([`backtrack`]): the static driver's
-/// safeguard (the tangent step that replaces a secant step which does not lower the
-/// out-of-balance norm) and the arc-length corrector's backtracking. Past J4D's peak
-/// the iterations cycled with the residual halving at α = ½ and then rising 20-fold at
-/// every α down to ⅛: a brick crack that closes within 4·10⁻⁸ m of the iterate, so that a
-/// step short of its closure is 10⁻³ of the Newton step; with steps down to 2⁻¹¹ the wall
-/// follows its softening branch to the end of the push, with four it stopped at
-/// 27.5–42 % of it (docs/decisions/0027-contact-state-corrector-and-chords.md).
+/// safeguard and the arc-length corrector's backtracking, where a step short of a contact's
+/// kink can be 10⁻³ of the Newton step (docs/decisions/0027-contact-state-corrector-and-chords.md).
 pub const LONG_LINE_SEARCH_STEPS: usize = 12;
 
 /// The step a line search kept ([`backtrack`]).

@@ -47,12 +47,8 @@ mod path_step;
 
 /// Changes of state of a contact within one arc-length increment after which it is
 /// frozen at the chord of its law from its committed force (the contact-state corrector,
-/// docs/theory.md, Eq. F1; its secant the elastic springs): on the Eindhoven wall
-/// (docs/decisions/0027-contact-state-corrector-and-chords.md) contacts at the kinks of their laws (the peak of a softening
-/// joint, the onset of slip, a brick crack closing) alternated between the two sides for
-/// every iteration of an increment, and on the snap-back joint of
-/// tests/validation_softening.rs Newton cycled at the peak with the residual between
-/// 2·10⁻⁶ and 7·10⁻⁵ of the load. Two instead of three stopped J6D at its old point.
+/// docs/theory.md, Eq. F1): contacts at the kinks of their laws otherwise alternate sides
+/// at every iteration (docs/decisions/0027-contact-state-corrector-and-chords.md).
 pub(super) const FLIP_LIMIT: u32 = 3;
 
 pub use crate::scene::settings::ArcLength;
@@ -132,12 +128,8 @@ const SWITCH_FRACTION: f64 = 0.1;
 
 /// The failed checks of Eq. F2 in a row, each with the true laws' out-of-balance force
 /// within [`CHECK_SAME`] of the one before, after which the increment has failed: the
-/// chords (Eq. F1) to a point where the frozen laws converge can lead back to that point
-/// when the iterate does not move (on J6D past its peak 300 checks in a row gave
-/// 9.467–9.469·10⁻⁴ of the load, the stall test restarting at every check). A check that
-/// raises the force is not such a repeat: on the snap-back joint of
-/// tests/validation_softening.rs (c) and (d) the regula falsi at the peak goes through
-/// cycles of checks at 8·10⁻³ to 1 of the load before one converges.
+/// chords can lead back to a point where the iterate does not move; a check that raises
+/// the force is not such a repeat (docs/decisions/0027-contact-state-corrector-and-chords.md).
 const CHECK_LIMIT: usize = 10;
 
 /// The relative difference (of the out-of-balance force with the true laws) within

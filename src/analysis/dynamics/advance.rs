@@ -6,7 +6,7 @@
 use super::*;
 
 /// The least slip (fraction of the band thickness) a contact's stick–slip event must move
-/// in its step, |Δδₛ| or |v̇ₛ| h at the step's end, for the step to be cut around it
+/// in its step, |Δδₛ| or |δ̇ₛ| h at the step's end, for the step to be cut around it
 /// ([`Dynamics::slip_event`]): the joints of a rock mass that stick and slip by less in
 /// every step cost the tunnel earthquake 7 times the steps
 /// (docs/decisions/0034-stick-slip-events.md).
@@ -310,7 +310,7 @@ impl Dynamics<'_> {
     /// ends that sticks at one and slips at the other, or slips at both in opposite
     /// directions (its shear force Fₛ changed sign), or slips at both in the same
     /// direction but ends with its slip velocity against its friction force
-    /// (Fₛ v̇ₛ < 0: the slip reversed within the step, the increment Δδₛ keeping the
+    /// (Fₛ δ̇ₛ < 0: the slip reversed within the step, the increment Δδₛ keeping the
     /// sign of the slip before the reversal). Where such an event falls inside a step the
     /// friction force jumps by up to 2 μ Fₙ there, while the scheme's trapezoidal rule
     /// v₁ = v₀ + h((1−γ) a₀ + γ a₁) spreads the jump over the whole step: an error of the

@@ -27,8 +27,9 @@ use std::path::Path;
 pub const FILE: &str = "checkpoint.bin";
 const MAGIC: &[u8; 8] = b"DFEMCKPT";
 /// Version of the format; a file of another version is refused. (4: the counters gained
-/// `tangent_fallbacks`; 5: each contact's history is two variables, ξ and the cap's κ₃.)
-pub const VERSION: u32 = 5;
+/// `tangent_fallbacks`; 5: each contact's history is two variables, ξ and the cap's κ₃;
+/// 6: the counters gained `event_cuts`, `step_error_max` and `step_error_sum`.)
+pub const VERSION: u32 = 6;
 
 /// The state of a dynamic run after `step` completed time steps.
 #[derive(Debug, Clone, Serialize, Deserialize)]

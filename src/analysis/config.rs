@@ -73,7 +73,7 @@ impl Committed {
 
 /// The components (normal, shear) of `v` in the frame of a contact of unit normal `n`:
 /// (n·v, t·v) with t = (−n_y, n_x).
-fn in_contact_frame(n: Point, v: Point) -> [f64; 2] {
+pub(crate) fn in_contact_frame(n: Point, v: Point) -> [f64; 2] {
     [n[0] * v[0] + n[1] * v[1], -n[1] * v[0] + n[0] * v[1]]
 }
 

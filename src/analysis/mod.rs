@@ -119,6 +119,14 @@ pub struct Stats {
     /// Converged time steps cut because their local error exceeded
     /// `adaptive_tolerance`.
     pub error_cuts: usize,
+    /// Converged time steps cut to locate a stick–slip event of a contact within them
+    /// (`event_cuts`, docs/theory.md §5, "Stick–slip events").
+    pub event_cuts: usize,
+    /// The local error estimate of the time steps (m; `Dynamics::step_error`, the
+    /// largest node displacement of h² (β − 1/6)(a₁ − a₀)): its largest value over the
+    /// steps and its sum, an estimate of the error the steps accumulated.
+    pub step_error_max: f64,
+    pub step_error_sum: f64,
     /// Time steps of a dynamic run redone because a contact that carried force at their
     /// start let go within them (`impact_reset`, docs/theory.md §5), and the iterations
     /// of those redos (included in `iterations`): each starts from the first try's

@@ -184,6 +184,7 @@ pub const ANALYSIS_KEYS: &[&str] = &[
     "impact_reset",
     "inertia",
     "adaptive_tolerance",
+    "event_cuts",
 ];
 
 /// Read and validate a scene file.

@@ -244,6 +244,10 @@ pub enum Start {
 /// doubles back after each converged one).
 pub const DYNAMIC_MAX_CUTS: usize = 12;
 
+/// Default halvings of a time step to locate a stick–slip event of a contact within it:
+/// the event is then placed to within dt/2⁴ (docs/decisions/0036-stick-slip-events.md).
+pub const DYNAMIC_EVENT_CUTS: usize = 4;
+
 /// Settings of the dynamic driver (`[analysis]` keys of `type = "dynamic"`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DynamicSettings {
@@ -273,6 +277,10 @@ pub struct DynamicSettings {
     /// step's node displacements allowed (`Dynamics::step_error`); `None`: steps of
     /// `dt` cut only when they do not converge or jump over an impact.
     pub adaptive: Option<f64>,
+    /// Halvings of a time step allowed to locate a change of a closed contact between
+    /// sticking and slipping, or a reversal of its slip (`event_cuts`;
+    /// `Dynamics::slip_event`, docs/theory.md §5, "Stick–slip events"); 0: none.
+    pub event_cuts: usize,
     /// `[analysis] frame = "absolute"`: the fixed blocks move with the ground (the
     /// prescribed motion of the foundation) instead of the ground-motion load on the free
     /// blocks ([`super::ground_motion::Frame`]).
@@ -295,6 +303,7 @@ impl DynamicSettings {
             reset_on_impact: true,
             inertia: true,
             adaptive: None,
+            event_cuts: DYNAMIC_EVENT_CUTS,
             absolute: false,
         }
     }

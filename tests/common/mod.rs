@@ -191,6 +191,24 @@ pub fn assert_ffi_backends_match_faer(sc: &Scene, petsc_options: &str) {
     }
 }
 
+/// El Centro 1940 N-S (tests/data, in g at 0.02 s), read independently of dfem's parser:
+/// its file, times (s) and accelerations (m/s²).
+#[allow(dead_code)]
+pub fn el_centro_record() -> (&'static str, Vec<f64>, Vec<f64>) {
+    let file = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/elcentro1940_NS_g_dt0.02.csv"
+    );
+    let csv = std::fs::read_to_string(file).unwrap();
+    let (mut t, mut a) = (vec![], vec![]);
+    for l in csv.lines().skip(1) {
+        let mut it = l.split(',');
+        t.push(it.next().unwrap().parse::<f64>().unwrap());
+        a.push(it.next().unwrap().parse::<f64>().unwrap() * 9.81);
+    }
+    (file, t, a)
+}
+
 /// The record (t_i, a_i) linearly interpolated at x, zero after its end.
 pub fn interpolate(t: &[f64], a: &[f64], x: f64) -> f64 {
     if x >= t[t.len() - 1] {
@@ -213,8 +231,19 @@ pub fn rigid_plastic_sliding(
     mu: f64,
     duration: f64,
 ) -> (f64, f64) {
+    rigid_plastic_sliding_step(ax, ay, mu, duration, 1e-4)
+}
+
+/// [`rigid_plastic_sliding`] with a step `dt` (s): the slip converges as O(dt) (the
+/// stick and slip events are located to within a step).
+pub fn rigid_plastic_sliding_step(
+    ax: impl Fn(f64) -> f64,
+    ay: impl Fn(f64) -> f64,
+    mu: f64,
+    duration: f64,
+    dt: f64,
+) -> (f64, f64) {
     let g = 9.81;
-    let dt = 1e-4;
     let (mut x, mut v, mut xmax) = (0.0f64, 0.0f64, 0.0f64);
     let steps = (duration / dt).round() as usize;
     for k in 0..steps {

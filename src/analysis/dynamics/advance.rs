@@ -5,6 +5,13 @@
 
 use super::*;
 
+/// The least slip (fraction of the band thickness) a contact's stick–slip event must move
+/// in its step, |Δδₛ| or |δ̇ₛ| h at the step's end, for the step to be cut around it
+/// ([`Dynamics::slip_event`]): the joints of a rock mass that stick and slip by less in
+/// every step cost the tunnel earthquake 7 times the steps
+/// (docs/decisions/0036-stick-slip-events.md).
+const EVENT_SLIP: f64 = 1e-4;
+
 impl Dynamics<'_> {
     /// Elastic energy (J) of a state: blocks ½ ∫ σᵀ Dₑ⁻¹ σ, contacts ½ (Fₙ²/kₙ + Fₛ²/kₛ).
     pub(super) fn elastic_energy(
@@ -175,6 +182,7 @@ impl Dynamics<'_> {
     /// Returns false when even the smallest step fails.
     pub(super) fn advance_to(&mut self, target: f64) -> Result<bool> {
         let hmin = self.settings.dt / 2f64.powi(self.settings.max_cuts as i32);
+        let hevent = self.settings.dt / 2f64.powi(self.settings.event_cuts as i32);
         let mut h = target - self.time;
         while self.time < target - 1e-9 * self.settings.dt {
             h = h.min(target - self.time);
@@ -206,11 +214,11 @@ impl Dynamics<'_> {
                 self.stats.release_redo_iterations += self.stats.iterations - before;
                 saved = Some(start);
             }
-            // the local error of an error-controlled step, computed once for the cut and
-            // for the growth of the next step
-            let error = match (&accepted, self.settings.adaptive) {
-                (Some(acc), Some(_)) => self.step_error(acc, h),
-                _ => 0.0,
+            // the local error of a step, computed once for the cut and the growth of the
+            // next step of an error-controlled run, and for the summary's estimate
+            let error = match &accepted {
+                Some(acc) => self.step_error(acc, h),
+                None => 0.0,
             };
             let cut = match &accepted {
                 None => true,
@@ -227,6 +235,12 @@ impl Dynamics<'_> {
                         && self.settings.adaptive.is_some_and(|tol| error > tol) =>
                 {
                     self.stats.error_cuts += 1;
+                    true
+                }
+                // a contact starts or stops slipping, or reverses, within the step: cut
+                // it until the event is placed to within dt/2^event_cuts
+                Some(acc) if h > hevent * (1.0 + 1e-9) && self.slip_event(acc) => {
+                    self.stats.event_cuts += 1;
                     true
                 }
                 Some(_) => false,
@@ -255,6 +269,8 @@ impl Dynamics<'_> {
                     // stay within the tolerance (the local error grows as h³)
                     let grow = self.settings.adaptive.is_none_or(|tol| error < tol / 8.0);
                     self.stats.bonds_broken += self.bonds_broken_here.len();
+                    self.stats.step_error_max = self.stats.step_error_max.max(error);
+                    self.stats.step_error_sum += error;
                     self.bonds_broken_here.clear();
                     self.commit(acc);
                     if crate::analysis::tracing() {
@@ -288,6 +304,41 @@ impl Dynamics<'_> {
         }
         self.time = target;
         Ok(true)
+    }
+
+    /// Whether a converged step holds a stick–slip event: a contact closed at both its
+    /// ends that sticks at one and slips at the other, or slips at both in opposite
+    /// directions (its shear force Fₛ changed sign), or slips at both in the same
+    /// direction but ends with its slip velocity against its friction force
+    /// (Fₛ δ̇ₛ < 0: the slip reversed within the step, the increment Δδₛ keeping the
+    /// sign of the slip before the reversal). Where such an event falls inside a step the
+    /// friction force jumps by up to 2 μ Fₙ there, while the scheme's trapezoidal rule
+    /// v₁ = v₀ + h((1−γ) a₀ + γ a₁) spreads the jump over the whole step: an error of the
+    /// order of μ Fₙ h/m in the velocity per event, which cutting the step around the
+    /// event reduces (docs/theory.md §5, "Stick–slip events").
+    pub(super) fn slip_event(&self, acc: &Accepted) -> bool {
+        use ContactState::{Open, Slip, Stick};
+        // the velocities relative to the ground (the foundation's own in the absolute
+        // frame), at the step's end
+        let v = self.relative(&acc.v, acc.ground_v1);
+        let mesh = &acc.trial.mesh;
+        let slip_rate = |k: usize| {
+            let c = &mesh.contacts[k];
+            let vn = |n: u32| mesh.node_displacement(n, &v);
+            let r = crate::geometry::polygon::sub(vn(c.node_m), c.at_l(vn));
+            crate::analysis::config::in_contact_frame(c.normal, r)[1]
+        };
+        let least = EVENT_SLIP * self.law.elastic.band;
+        (0..acc.trial.state.len()).any(|k| {
+            let (s0, s1) = (self.committed.state[k], acc.trial.state[k]);
+            let (f0, f1) = (self.committed.force[k][1], acc.trial.force[k][1]);
+            let event = match (s0, s1) {
+                (Stick, Slip) | (Slip, Stick) => true,
+                (Slip, Slip) => f0 * f1 < 0.0 || f1 * slip_rate(k) < 0.0,
+                (Open, _) | (_, Open) | (Stick, Stick) => false,
+            };
+            event && acc.trial.rel[k][1].abs().max(slip_rate(k).abs() * acc.h) > least
+        })
     }
 
     /// The contacts a converged step opens that were closed at its start, if any (with

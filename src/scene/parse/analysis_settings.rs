@@ -298,6 +298,7 @@ impl AnalysisTable<'_> {
                 "inertia = true (default: M ü kept) or false (pseudo-dynamic: C u̇ + F_int = F(t))",
             )?,
             adaptive: self.optional_number("adaptive_tolerance", 1e-6, 1e-15, 1.0)?,
+            event_cuts: self.number("event_cuts", d.event_cuts as f64, 0.0, 30.0)? as usize,
             absolute: frame == Frame::Absolute,
         })
     }

@@ -350,6 +350,10 @@ fn capacity_curve_ends_at_the_critical_load_factor() {
     check_png_size(&figs.join("capacity_curve.png"), CURVE_PX);
     let svg = read_svg(&figs.join("capacity_curve.svg"));
     assert!(svg.contains("λ = "), "legend with the critical λ");
+    assert!(
+        svg.contains("(control and top)"),
+        "one block, control and top"
+    );
     let deformed = read_svg(&figs.join("deformed.svg"));
     assert!(
         deformed.matches("fill=\"#DC1414\"").count() > 1,

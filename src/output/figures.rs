@@ -857,7 +857,8 @@ fn draw_curve<DB: DrawingBackend>(
         .map_err(e)?;
     let blue = RGBColor(31, 90, 180);
     let orange = RGBColor(230, 120, 20);
-    let mut series = vec![(1, blue, format!("block '{control}' (control)"))];
+    let role = if two { "control" } else { "control and top" };
+    let mut series = vec![(1, blue, format!("block '{control}' ({role})"))];
     if two {
         series.push((2, orange, format!("block '{top}' (top)")));
     }

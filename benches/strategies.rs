@@ -141,7 +141,8 @@ fn run_case(courses: usize, bricks: usize, strategy: &str, tolerance: f64, brack
         Ok(out) => {
             let message = match &out.status {
                 dfem::analysis::Status::Stable => "stable".to_string(),
-                dfem::analysis::Status::Failed { reason, .. } => reason.clone(),
+                dfem::analysis::Status::Failed { reason, .. }
+                | dfem::analysis::Status::NotConverged { reason, .. } => reason.clone(),
                 dfem::analysis::Status::Interrupted { time } => format!("interrupted at {time} s"),
             };
             let lambda = out

@@ -35,6 +35,41 @@ fn check_png(path: &Path, kb: u64) {
     );
 }
 
+/// The size (width, height) in pixels of the capacity curve figure.
+const CURVE_PX: (u32, u32) = (900, 640);
+
+/// A PNG whose header (IHDR, right after the signature) gives `size` (width, height).
+fn check_png_size(path: &Path, size: (u32, u32)) {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(bytes[..8], PNG_SIGNATURE, "{}", path.display());
+    assert_eq!(&bytes[12..16], b"IHDR", "{}", path.display());
+    let be = |i: usize| u32::from_be_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
+    assert_eq!((be(16), be(20)), size, "{}", path.display());
+}
+
+/// The rows of a curve.csv after its header, which must be `header`.
+fn curve_rows(csv: &str, header: &str) -> Vec<Vec<f64>> {
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some(header));
+    lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect()
+}
+
+/// `dfem plot` draws the run `run`'s capacity curve into `again` from curve.csv, byte for
+/// byte as the run drew it.
+fn curve_redraws_the_same(run: &Path, again: &Path) {
+    let (r, a) = (run.to_str().unwrap(), again.to_str().unwrap());
+    ok(&dfem(&["plot", r, "--out", a]), "plot");
+    for f in ["capacity_curve.png", "capacity_curve.svg"] {
+        assert!(
+            std::fs::read(run.join("figures").join(f)).unwrap()
+                == std::fs::read(again.join(f)).unwrap(),
+            "{f} differs when redrawn"
+        );
+    }
+}
+
 /// An SVG; returns its text.
 fn read_svg(path: &Path) -> String {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -75,8 +110,12 @@ fn every_example_draws_its_figures_and_plot_redraws_them() {
             "{name}: {polygons} polygons, {blocks} blocks"
         );
         assert!(svg.contains("|u| (m)"), "{name}: colour bar");
-        // static examples draw no capacity curve
-        assert!(!figs.join("capacity_curve.png").exists(), "{name}");
+        // static examples draw no capacity curve, but for a push (the Eindhoven walls)
+        let push = text.contains("push_block");
+        assert_eq!(figs.join("capacity_curve.png").exists(), push, "{name}");
+        if push {
+            check_png_size(&figs.join("capacity_curve.png"), CURVE_PX);
+        }
         // dynamic ones draw the displacement histories (history.csv), static ones none
         let dynamic = text.contains("type = \"dynamic\"");
         assert_eq!(figs.join("history.png").exists(), dynamic, "{name}");
@@ -92,6 +131,13 @@ fn every_example_draws_its_figures_and_plot_redraws_them() {
         ok(&out, name);
         let redrawn: &[&str] = if dynamic {
             &["deformed.png", "deformed.svg", "history.png", "history.svg"]
+        } else if push {
+            &[
+                "deformed.png",
+                "deformed.svg",
+                "capacity_curve.png",
+                "capacity_curve.svg",
+            ]
         } else {
             &["deformed.png", "deformed.svg"]
         };
@@ -258,12 +304,14 @@ fn capacity_curve_ends_at_the_critical_load_factor() {
     let lambda = summary["load_factor"].as_f64().unwrap();
     assert!(lambda > 0.1, "{lambda}");
     let csv = std::fs::read_to_string(run.join("curve.csv")).unwrap();
-    let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("load_factor,ux_m,uy_m"));
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
-        .collect();
+    let rows = curve_rows(&csv, "load_factor,ux_m,uy_m,top_ux_m,top_uy_m");
     assert!(rows.len() >= 3, "{csv}");
+    // the control block is the top block: its displacement twice
+    assert_eq!(
+        summary["curve"]["top_block"],
+        summary["curve"]["control_block"]
+    );
+    assert!(rows.iter().all(|r| r[3..] == r[1..3]), "{csv}");
     assert_eq!(rows[0][0], 0.0, "the curve starts after gravity");
     for w in rows.windows(2) {
         assert!(w[1][0] > w[0][0], "λ increases: {csv}");
@@ -299,8 +347,13 @@ fn capacity_curve_ends_at_the_critical_load_factor() {
     // figures: the deformed shape shows open contacts (red) and the curve is drawn
     let figs = run.join("figures");
     check_png(&figs.join("capacity_curve.png"), 10);
+    check_png_size(&figs.join("capacity_curve.png"), CURVE_PX);
     let svg = read_svg(&figs.join("capacity_curve.svg"));
     assert!(svg.contains("λ = "), "legend with the critical λ");
+    assert!(
+        svg.contains("(control and top)"),
+        "one block, control and top"
+    );
     let deformed = read_svg(&figs.join("deformed.svg"));
     assert!(
         deformed.matches("fill=\"#DC1414\"").count() > 1,
@@ -317,22 +370,7 @@ fn capacity_curve_ends_at_the_critical_load_factor() {
     );
     assert!(!deformed.contains("mechanism (0 blocks)"));
     // and `dfem plot` redraws the curve from curve.csv
-    let again = dir.join("again");
-    ok(
-        &dfem(&[
-            "plot",
-            run.to_str().unwrap(),
-            "--out",
-            again.to_str().unwrap(),
-        ]),
-        "plot",
-    );
-    for f in ["capacity_curve.png", "capacity_curve.svg"] {
-        assert!(
-            std::fs::read(figs.join(f)).unwrap() == std::fs::read(again.join(f)).unwrap(),
-            "{f} differs when redrawn"
-        );
-    }
+    curve_redraws_the_same(&run, &dir.join("again"));
 }
 
 #[test]
@@ -377,4 +415,75 @@ fn progress_reports_do_not_change_the_results() {
         .map(|b| b.centroid[1])
         .fold(f64::NEG_INFINITY, f64::max);
     assert_eq!(m.blocks[curve.control_block].centroid[1], top);
+}
+
+/// A push draws its capacity curve too: the horizontal force on the pushed block against
+/// its displacement and the top block's. The middle block of a stack of three (rigid,
+/// rigid, deformable; φ = 30°) pushed 2 mm slides on the block below under the weight of
+/// two blocks, W = 2 × 0.5 m² × 25 kN/m³, and carries the top block with it: the force
+/// levels off at W tan φ, the top block's displacement
+/// follows the pushed one's once the push slides, and `dfem plot` draws the same figure
+/// from curve.csv.
+#[test]
+fn a_push_draws_its_capacity_curve_with_the_top_block() {
+    let dir = common::tmp_dir("figures_push_curve");
+    let mut scene = String::from("title = \"push\"\n");
+    scene += &common::rock_and_joint(30.0);
+    scene += "[[block]]\nname = \"ground\"\nmaterial = \"rock\"\nsupport = \"fixed\"\nvertices = [[-1.0, -1.0], [2.0, -1.0], [2.0, 0.0], [-1.0, 0.0]]\n";
+    for (k, kind) in ["rigid", "rigid", "deformable"].iter().enumerate() {
+        let (y0, y1) = (0.5 * k as f64, 0.5 * (k + 1) as f64);
+        scene += &format!("[[block]]\nname = \"b{k}\"\nmaterial = \"rock\"\nkind = \"{kind}\"\nvertices = [[0.0, {y0:?}], [1.0, {y0:?}], [1.0, {y1:?}], [0.0, {y1:?}]]\n");
+    }
+    scene += "[analysis]\ntype = \"static\"\nload_steps = 20\npush_block = \"b1\"\npush_displacement = 2e-3\n";
+    let file = dir.join("push.toml");
+    std::fs::write(&file, scene).unwrap();
+    let run = dir.join("run");
+    ok(
+        &dfem(&[
+            "run",
+            file.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            run.to_str().unwrap(),
+        ]),
+        "run",
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "stable");
+    assert_eq!(summary["curve"]["control_block"], "b1");
+    assert_eq!(summary["curve"]["top_block"], "b2");
+    let csv = std::fs::read_to_string(run.join("curve.csv")).unwrap();
+    let rows = curve_rows(
+        &csv,
+        "load_factor,ux_m,uy_m,force_x_N,force_y_N,moment_Nm,top_ux_m,top_uy_m",
+    );
+    // one row after gravity, one per increment of the push (none cut), the last at its end
+    assert_eq!(summary["stats"]["load_cuts"], 0);
+    assert_eq!(rows.len(), 21);
+    assert_eq!(rows.last().unwrap()[0], 1.0);
+    assert!((rows.last().unwrap()[1] - 2e-3).abs() < 1e-12, "{csv}");
+    let w = 2.0 * 0.5 * 25e3;
+    let limit = w * 30f64.to_radians().tan();
+    let last = rows.last().unwrap();
+    // (within the tolerance: 10⁻⁶ of a force scale, the weight and the reactions, a few
+    // times the push force)
+    assert!(
+        common::rel_err(last[3], limit) < 1e-5,
+        "{} against {limit}",
+        last[3]
+    );
+    // the top block rides on the pushed one: the same slip, within its elastic shear
+    assert!(
+        (last[6] - last[1]).abs() < 1e-6 && last[6] > 1.9e-3,
+        "{csv}"
+    );
+    let figs = run.join("figures");
+    check_png_size(&figs.join("capacity_curve.png"), CURVE_PX);
+    let svg = read_svg(&figs.join("capacity_curve.svg"));
+    assert!(
+        svg.contains("peak force") && svg.contains("(top)"),
+        "legend"
+    );
+    curve_redraws_the_same(&run, &dir.join("again"));
 }

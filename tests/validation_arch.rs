@@ -102,6 +102,7 @@ fn dfem_status(t_over_r: f64, n: usize) -> (bool, Option<String>) {
     match out.status {
         Status::Stable => (true, None),
         Status::Failed { .. } => (false, out.mechanism.map(|m| m.mode)),
+        Status::NotConverged { reason, .. } => panic!("not converged: {reason}"),
         Status::Interrupted { .. } => unreachable!("a static run is never interrupted"),
     }
 }

@@ -86,6 +86,7 @@ fn computed(alpha: f64, ratio: f64, kind: &str) -> String {
             assert_eq!(m.mode, b.1.as_str());
             m.mode
         }
+        Status::NotConverged { reason, .. } => panic!("not converged: {reason}"),
         Status::Interrupted { .. } => unreachable!("a static run is never interrupted"),
     }
 }

@@ -328,24 +328,28 @@ fn triangle_stress(inputs: &Inputs, du: &[Point], t: usize) -> [f64; 3] {
     let tri = cur.triangles[t];
     let x0 = tri.map(|k| cur.nodes[k as usize]);
     let (b0, _) = cst_b(x0);
-    // F = ∂x/∂X = I + ∇Δu (constant over a CST)
-    let mut f = [[1.0, 0.0], [0.0, 1.0]];
+    // H = ∇Δu (constant over a CST), F = ∂x/∂X = I + H
+    let mut h = [[0.0, 0.0], [0.0, 0.0]];
     for k in 0..3 {
         let d = du[tri[k] as usize];
         for i in 0..2 {
-            f[i][0] += d[i] * b0[0][2 * k];
-            f[i][1] += d[i] * b0[1][2 * k + 1];
+            h[i][0] += d[i] * b0[0][2 * k];
+            h[i][1] += d[i] * b0[1][2 * k + 1];
         }
     }
     // polar decomposition in 2D: R = rotation by θ
-    let th = (f[1][0] - f[0][1]).atan2(f[0][0] + f[1][1]);
+    let th = (h[1][0] - h[0][1]).atan2(2.0 + h[0][0] + h[1][1]);
     let (s, c) = th.sin_cos();
-    // U = Rᵀ F
-    let u = [
-        [c * f[0][0] + s * f[1][0], c * f[0][1] + s * f[1][1]],
-        [-s * f[0][0] + c * f[1][0], -s * f[0][1] + c * f[1][1]],
+    // the strain U − I = Rᵀ F − I = (Rᵀ − I) + Rᵀ H, with c − 1 = −2 sin²(θ/2): formed
+    // from H, never as a difference from 1, whose round-off (10⁻¹⁶ of a strain, times the
+    // modulus) is an out-of-balance force no correction removes on blocks far stiffer
+    // than their joints (docs/decisions/0037-stall-or-mechanism.md)
+    let cm1 = -2.0 * (0.5 * th).sin().powi(2);
+    let eps = [
+        cm1 + c * h[0][0] + s * h[1][0],
+        cm1 + c * h[1][1] - s * h[0][1],
+        c * (h[0][1] + h[1][0]) + s * (h[1][1] - h[0][0]),
     ];
-    let eps = [u[0][0] - 1.0, u[1][1] - 1.0, u[0][1] + u[1][0]];
     let dt = system.tri_dt(t);
     let s0 = committed.stress[t];
     let mut sl = [0.0; 3];

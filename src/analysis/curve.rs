@@ -16,6 +16,9 @@ pub struct CurvePoint {
     /// forces (N) and the moment (N·m) that hold the pushed block on its path; `None` for
     /// a capacity curve.
     pub reaction: Option<[f64; 3]>,
+    /// Displacement of the top block's centroid (m), total since the start
+    /// ([`Curve::top_block`]; the control block's own in a capacity curve).
+    pub top: [f64; 2],
 }
 
 /// The capacity curve of a run.
@@ -24,6 +27,9 @@ pub struct Curve {
     /// The control block: the top-most free block (highest centroid; the first in scene
     /// order on ties).
     pub control_block: usize,
+    /// The top-most free block ([`control_block`]): the control block of a capacity
+    /// curve, whose displacement a push's curve also records.
+    pub top_block: usize,
     /// From the state after gravity (λ = 0) to the last converged increment.
     pub points: Vec<CurvePoint>,
     /// Displacement control (`[analysis] push_block`): how far the push went and why it
@@ -83,4 +89,26 @@ pub fn control_displacement(mesh0: &Mesh, cur: &Mesh, u: &[f64], block: usize) -
         })
         .collect();
     super::fit_motion(mesh0, block, &disp).0
+}
+
+/// The centroid displacement (m) of the free block `block` from the total unknowns `u`
+/// alone, in the configuration `cur`: a rigid block's own unknowns, or the motion fitted
+/// to a deformable block's nodes, whose unknowns are their total displacements
+/// ([`super::fit_motion`]).
+pub fn block_displacement(cur: &Mesh, u: &[f64], block: usize) -> [f64; 2] {
+    match cur.blocks[block].dofs {
+        BlockDofs::Rigid { first, .. } => [u[first as usize], u[first as usize + 1]],
+        BlockDofs::Deformable => {
+            let disp: Vec<[f64; 2]> = cur.blocks[block]
+                .nodes
+                .clone()
+                .map(|n| {
+                    let d = cur.node_dofs[n as usize];
+                    [u[d[0] as usize], u[d[1] as usize]]
+                })
+                .collect();
+            super::fit_motion(cur, block, &disp).0
+        }
+        BlockDofs::Fixed => [0.0, 0.0],
+    }
 }

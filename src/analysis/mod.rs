@@ -32,6 +32,15 @@ pub enum Status {
         reason: String,
         blocks: Vec<usize>,
     },
+    /// The iterations of a static or capacity run stopped converging with no mechanism
+    /// in sight (docs/outputs.md, "summary.json", `"not_converged"`): `reason` says
+    /// where, `residual` is the out-of-balance norm left relative to the load, `block`
+    /// the free block with the largest out-of-balance force and that force (N).
+    NotConverged {
+        reason: String,
+        residual: f64,
+        block: Option<(usize, f64)>,
+    },
     /// A dynamic run stopped on request (Ctrl-C) after the step that reached `time` (s);
     /// its checkpoint lets `dfem run --resume` continue it.
     Interrupted {

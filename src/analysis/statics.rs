@@ -21,7 +21,7 @@ use crate::mesh::Mesh;
 use crate::scene::{AnalysisType, Scene};
 use crate::solve::LinearBackend;
 use crate::Result;
-use dfem_kernels::CsrMatrix;
+use dfem_kernels::{CsrMatrix, CONSTRAINED};
 use std::time::Instant;
 
 pub mod arc_length;
@@ -108,6 +108,12 @@ pub struct Driver<'a> {
     pins: Vec<(usize, f64)>,
     /// The curve of the displacement-controlled phase so far.
     push_curve: Vec<super::curve::CurvePoint>,
+    /// The arc-length path ended on an increment whose iterations did not converge under
+    /// any constraint, at this relative out-of-balance force (`arc_length::run`).
+    path_stall: Option<f64>,
+    /// The top-most free block ([`super::curve::control_block`]), whose displacement a
+    /// push's curve records beside the pushed block's.
+    top_block: Option<usize>,
     /// Per contact: its changes of state in the iterations of the current arc-length
     /// increment (`arc_length`; empty under displacement control).
     flips: Vec<u32>,
@@ -231,6 +237,17 @@ pub struct Failure {
     pub states: Vec<ContactState>,
     pub forces: Vec<[f64; 2]>,
     pub loads: Vec<[f64; 2]>,
+    /// The out-of-balance norm of the last trial relative to the force scale (as the
+    /// tolerance measures it).
+    pub residual: f64,
+    /// The free block that carries the largest out-of-balance force of the last trial
+    /// (at one node, or a rigid block's centroid) and that force (N).
+    pub worst: Option<(usize, f64)>,
+    /// Whether the failure shows a mechanism (docs/outputs.md, "summary.json"): the
+    /// increment diverged or its secant matrix was singular (a free mode), or a contact
+    /// of its last trial slips or is open. With every contact sticking the blocks are held
+    /// elastically and no mechanism can form: the iterations stopped converging.
+    pub mechanism: bool,
 }
 
 /// Why an increment did not converge.
@@ -282,6 +299,8 @@ impl<'a> Driver<'a> {
             report: Report::default(),
             pins: Vec::new(),
             push_curve: Vec::new(),
+            path_stall: None,
+            top_block: super::curve::control_block(mesh),
             flips: Vec::new(),
             frozen: Vec::new(),
             fallen: Vec::new(),
@@ -546,7 +565,27 @@ impl<'a> Driver<'a> {
         increment.finish(end)
     }
 
-    fn failure(&self, mode: Vec<f64>, trial: &Trial, f_ext: &[f64]) -> Failure {
+    /// The failure of an increment whose last trial is `trial` under `f_ext` (N), `mode`
+    /// its failure mode; `free_mode`: it diverged or its secant matrix was singular.
+    fn failure(&self, mode: Vec<f64>, trial: &Trial, f_ext: &[f64], free_mode: bool) -> Failure {
+        let r = self.out_of_balance(f_ext, &trial.f_int);
+        let at = |d: u32| if d == CONSTRAINED { 0.0 } else { r[d as usize] };
+        let mut worst: Option<(usize, f64)> = None;
+        for (bi, b) in self.cur.blocks.iter().enumerate() {
+            let f = match b.dofs {
+                crate::mesh::BlockDofs::Rigid { first, .. } => at(first).hypot(at(first + 1)),
+                crate::mesh::BlockDofs::Deformable => b.nodes.clone().fold(0.0f64, |m, n| {
+                    let d = self.cur.node_dofs[n as usize];
+                    m.max(at(d[0]).hypot(at(d[1])))
+                }),
+                crate::mesh::BlockDofs::Fixed => continue,
+            };
+            if worst.is_none_or(|w| f > w.1) {
+                worst = Some((bi, f));
+            }
+        }
+        let residual = Driver::norm(&r) / self.force_scale(f_ext, &trial.f_int);
+        let mechanism = free_mode || trial.state.iter().any(|s| *s != ContactState::Stick);
         let loads = self
             .cur
             .blocks
@@ -567,6 +606,9 @@ impl<'a> Driver<'a> {
             states: trial.state.clone(),
             forces: trial.force.clone(),
             loads,
+            residual,
+            worst,
+            mechanism,
         }
     }
 

@@ -259,6 +259,32 @@ fn unknown_example(name: &str) -> Error {
 /// Exit status of a dynamic run stopped by Ctrl-C (128 + SIGINT, as shells report it).
 pub const EXIT_INTERRUPTED: u8 = 130;
 
+/// Exit status of a static or capacity run whose iterations stopped converging with no
+/// mechanism in sight (summary.json `"not_converged"`, docs/outputs.md): its results are
+/// written, but they answer nothing.
+pub const EXIT_NOT_CONVERGED: u8 = 3;
+
+/// What a run that did not converge tells the user (stderr): the out-of-balance force
+/// left (`residual`, relative to the load), where it is largest (`block`: the block and
+/// the force, N), and what to try.
+pub fn not_converged_advice(
+    sc: &scene::Scene,
+    residual: f64,
+    block: Option<(usize, f64)>,
+) -> String {
+    let at = block.map_or(String::new(), |(b, f)| {
+        format!(", largest at block '{}' ({f:.3e} N)", sc.blocks[b].name)
+    });
+    format!(
+        "not converged: the iterations stopped with an out-of-balance force of {residual:.2e} of the load{at} \
+         (tolerance {:.0e}) and no mechanism in sight; this is not a collapse. Try, in [analysis]: \
+         more iterations (max_iterations), a looser tolerance (tolerance), strategy = \"newton\", \
+         smaller load steps (load_steps, gravity_steps); or joints whose stiffness is closer to \
+         the blocks' (normal_modulus, shear_modulus)",
+        sc.analysis.settings.statics().map_or(1e-6, |s| s.tolerance)
+    )
+}
+
 /// The scene a checkpoint was run with: `given` when there is one (it must be the same),
 /// otherwise the file (or built-in example) the checkpoint names.
 fn resumed_scene(
@@ -420,8 +446,20 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                     analysis::Status::Failed { reason, .. } => {
                         println!("failed: {reason}; results in {}", out.display())
                     }
+                    analysis::Status::NotConverged { reason, .. } => {
+                        println!("not converged: {reason}; results in {}", out.display())
+                    }
                     analysis::Status::Interrupted { .. } => {}
                 }
+            }
+            if let analysis::Status::NotConverged {
+                residual, block, ..
+            } = &outcome.status
+            {
+                // on stderr even with --quiet: no mechanism was found, so the result is no
+                // answer, and the user has something to try
+                eprintln!("{}", not_converged_advice(&sc, *residual, *block));
+                *code = EXIT_NOT_CONVERGED;
             }
             if let analysis::Status::Interrupted { time } = outcome.status {
                 // on stderr even with --quiet: the exit status alone does not say how to go on
@@ -460,15 +498,17 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             let curve = output::read::curve(&dir)?;
             let history = output::read::history(&dir)?;
             let summary = output::read::summary(&dir)?;
-            let control = summary["curve"]["control_block"]
-                .as_str()
-                .unwrap_or("control")
-                .to_string();
+            let name = |key: &str| summary["curve"][key].as_str().map(String::from);
+            let control = name("control_block").unwrap_or_else(|| "control".into());
+            let top = name("top_block").unwrap_or_else(|| control.clone());
+            let curve = curve.and_then(|c| {
+                output::figures::CurveFigure::from_columns(&c.columns, &c.rows, &control, &top)
+            });
             let fig_dir = out.unwrap_or_else(|| dir.join("figures"));
             let written = output::figures::write_figures(
                 &fig_dir,
                 &fig,
-                curve.as_deref().map(|r| (r, control.as_str())),
+                curve.as_ref(),
                 history.as_ref().filter(|h| !h.rows.is_empty()),
                 amplification,
                 &formats,

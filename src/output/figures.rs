@@ -739,23 +739,61 @@ fn draw_deformed<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Draw the capacity curve (λ against the control displacement ux) into `path`.
-/// `rows`: (λ, ux, uy); `control`: the control block's name.
-pub fn capacity_curve(
-    path: &Path,
-    title: &str,
-    rows: &[[f64; 3]],
-    control: &str,
-    format: Format,
-) -> Result<()> {
+/// A capacity curve as drawn ([`capacity_curve`]), from the rows of curve.csv
+/// (docs/outputs.md, "The capacity curve").
+#[derive(Debug, Clone, PartialEq)]
+pub struct CurveFigure {
+    /// A push's curve (`[analysis] push_block`): the load drawn is the horizontal force on
+    /// the pushed block (N, `force_x_N`); otherwise the load factor λ.
+    pub push: bool,
+    /// The control block's name (the pushed block of a push) and the top block's.
+    pub control: String,
+    pub top: String,
+    /// Per converged state: the load (λ, or N), the control block's ux and the top
+    /// block's ux (m).
+    pub rows: Vec<[f64; 3]>,
+}
+
+impl CurveFigure {
+    /// From curve.csv's `columns` and `rows` (a file without `top_ux_m`, written before
+    /// that column, draws the control block alone); `None` without the columns it needs.
+    pub fn from_columns(
+        columns: &[String],
+        rows: &[Vec<f64>],
+        control: &str,
+        top: &str,
+    ) -> Option<CurveFigure> {
+        let col = |name: &str| columns.iter().position(|c| c == name);
+        let push = col("force_x_N");
+        let (y, ux) = (push.or(col("load_factor"))?, col("ux_m")?);
+        let (top_ux, top) = match col("top_ux_m") {
+            Some(c) => (c, top),
+            None => (ux, control),
+        };
+        let get = |r: &Vec<f64>, c: usize| r.get(c).copied().unwrap_or(f64::NAN);
+        Some(CurveFigure {
+            push: push.is_some(),
+            control: control.to_string(),
+            top: top.to_string(),
+            rows: rows
+                .iter()
+                .map(|r| [get(r, y), get(r, ux), get(r, top_ux)])
+                .collect(),
+        })
+    }
+}
+
+/// Draw the capacity curve (the load against the horizontal displacement of the control
+/// block, and of the top block where that is another block) into `path`.
+pub fn capacity_curve(path: &Path, title: &str, curve: &CurveFigure, format: Format) -> Result<()> {
     match format {
         Format::Svg => {
             let root = SVGBackend::new(path, (900, 640)).into_drawing_area();
-            draw_curve(root, title, rows, control).map_err(plot_err(path))
+            draw_curve(root, title, curve).map_err(plot_err(path))
         }
         Format::Png => {
             let root = BitMapBackend::new(path, (900, 640)).into_drawing_area();
-            draw_curve(root, title, rows, control).map_err(plot_err(path))
+            draw_curve(root, title, curve).map_err(plot_err(path))
         }
     }
 }
@@ -763,12 +801,16 @@ pub fn capacity_curve(
 fn draw_curve<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     title: &str,
-    rows: &[[f64; 3]],
-    control: &str,
+    curve: &CurveFigure,
 ) -> std::result::Result<(), String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    let rows = &curve.rows;
+    let two = curve.top != curve.control;
     root.fill(&WHITE).map_err(e)?;
-    let xs = rows.iter().map(|r| r[1]).filter(|v| v.is_finite());
+    let xs = rows
+        .iter()
+        .flat_map(|r| [r[1], if two { r[2] } else { r[1] }])
+        .filter(|v| v.is_finite());
     let (mut x0, mut x1) = xs.fold((0.0f64, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
     if x1 - x0 <= 0.0 {
         x1 = x0 + 1e-6;
@@ -776,12 +818,10 @@ fn draw_curve<DB: DrawingBackend>(
     let pad = 0.05 * (x1 - x0);
     x0 -= if x0 < 0.0 { pad } else { 0.0 };
     x1 += pad;
-    let lmax = rows
-        .iter()
-        .map(|r| r[0])
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, f64::max);
+    let ys = rows.iter().map(|r| r[0]).filter(|v| v.is_finite());
+    let (lmin, lmax) = ys.fold((0.0f64, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
     let y1 = if lmax > 0.0 { 1.12 * lmax } else { 1.0 };
+    let y0 = 1.12 * lmin;
     let rx = x1 - x0;
     let mut chart = ChartBuilder::on(&root)
         .caption(
@@ -795,41 +835,71 @@ fn draw_curve<DB: DrawingBackend>(
         .margin(15)
         .x_label_area_size(50)
         .y_label_area_size(65)
-        .build_cartesian_2d(x0..x1, 0.0..y1)
+        .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(e)?;
+    let (control, top) = (&curve.control, &curve.top);
     chart
         .configure_mesh()
-        .x_desc(format!(
-            "horizontal displacement of block '{control}' (centroid), m"
-        ))
-        .y_desc("load factor λ (lateral force / weight)")
+        .x_desc(if two {
+            "horizontal displacement of the block's centroid, m".to_string()
+        } else {
+            format!("horizontal displacement of block '{control}' (centroid), m")
+        })
+        .y_desc(if curve.push {
+            format!("horizontal force on block '{control}', N")
+        } else {
+            "load factor λ (lateral force / weight)".to_string()
+        })
         .x_label_formatter(&|v| fmt_num(*v, rx))
+        .y_label_formatter(&|v| fmt_num(*v, y1 - y0))
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(e)?;
     let blue = RGBColor(31, 90, 180);
-    chart
-        .draw_series(LineSeries::new(
-            rows.iter().map(|r| (r[1], r[0])),
-            blue.stroke_width(2),
-        ))
-        .map_err(e)?;
-    chart
-        .draw_series(
-            rows.iter()
-                .map(|r| Circle::new((r[1], r[0]), 3, blue.filled())),
-        )
-        .map_err(e)?;
-    if let Some(last) = rows.last() {
-        let red = RGBColor(200, 30, 30);
+    let orange = RGBColor(230, 120, 20);
+    let role = if two { "control" } else { "control and top" };
+    let mut series = vec![(1, blue, format!("block '{control}' ({role})"))];
+    if two {
+        series.push((2, orange, format!("block '{top}' (top)")));
+    }
+    for (c, colour, label) in series {
         chart
             .draw_series(LineSeries::new(
-                [(x0, last[0]), (x1, last[0])],
-                red.stroke_width(1),
+                rows.iter().map(|r| (r[c], r[0])),
+                colour.stroke_width(2),
             ))
             .map_err(e)?
-            .label(format!("last converged λ = {:.4}", last[0]))
+            .label(label)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            });
+        chart
+            .draw_series(
+                rows.iter()
+                    .map(|r| Circle::new((r[c], r[0]), 3, colour.filled())),
+            )
+            .map_err(e)?;
+    }
+    // a capacity curve marks its last converged λ (the capacity), a push its peak force
+    let mark = if curve.push {
+        rows.iter()
+            .map(|r| r[0])
+            .filter(|v| v.is_finite())
+            .reduce(f64::max)
+            .map(|f| (f, format!("peak force = {f:.4e} N")))
+    } else {
+        rows.last()
+            .map(|r| (r[0], format!("last converged λ = {:.4}", r[0])))
+    };
+    if let Some((y, label)) = mark {
+        let red = RGBColor(200, 30, 30);
+        chart
+            .draw_series(LineSeries::new([(x0, y), (x1, y)], red.stroke_width(1)))
+            .map_err(e)?
+            .label(label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red));
+    }
+    if !rows.is_empty() {
         draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
     }
     root.present().map_err(e)?;
@@ -863,12 +933,12 @@ pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::Coor
 }
 
 /// The figure files written for `formats` into `dir` (created): deformed.* always,
-/// capacity_curve.* when `curve` is given as (rows, control block name), history.* when
+/// capacity_curve.* when `curve` is given, history.* when
 /// a dynamic run's `history` is given ([`super::time_history`]).
 pub fn write_figures(
     dir: &Path,
     fig: &Deformed,
-    curve: Option<(&[[f64; 3]], &str)>,
+    curve: Option<&CurveFigure>,
     history: Option<&crate::analysis::dynamics::History>,
     amplification: Option<f64>,
     formats: &[Format],
@@ -881,11 +951,9 @@ pub fn write_figures(
             deformed(tmp, fig, amplification, f).map(|_| ())
         })?;
         written.push(path);
-        if let Some((rows, control)) = curve {
+        if let Some(curve) = curve {
             let path = dir.join(format!("capacity_curve.{}", f.extension()));
-            draw_atomic(&path, |tmp| {
-                capacity_curve(tmp, &fig.title, rows, control, f)
-            })?;
+            draw_atomic(&path, |tmp| capacity_curve(tmp, &fig.title, curve, f))?;
             written.push(path);
         }
         if let Some(h) = history {

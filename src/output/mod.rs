@@ -93,6 +93,9 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
                 "interrupted at t = {time} s; the results up to then are written; continue with `dfem run --resume DIR`"
             )),
         ),
+        Status::NotConverged { reason, .. } => {
+            ("not_converged", Value::Null, Value::String(reason.clone()))
+        }
         Status::Failed { reason, .. } => (
             "failed",
             match &out.mechanism {
@@ -117,6 +120,14 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
         },
         "load_factor": out.load_factor,
         "failure": failure,
+        "out_of_balance": match &out.status {
+            Status::NotConverged { residual, block, .. } => json!({
+                "relative": residual.is_finite().then_some(*residual),
+                "block": block.map(|b| scene.blocks[b.0].name.as_str()),
+                "largest_N": block.map(|b| b.1),
+            }),
+            _ => Value::Null,
+        },
         "fallen": fallen,
         "blocks": blocks,
         "stats": {
@@ -161,6 +172,7 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
         "curve": out.capacity_curve.as_ref().map(|c| json!({
             "file": "curve.csv",
             "control_block": scene.blocks[c.control_block].name,
+            "top_block": scene.blocks[c.top_block].name,
             "path": c.path.as_ref().map(|p| json!({
                 "reached": p.reached,
                 "furthest_m": p.furthest,
@@ -179,23 +191,50 @@ pub fn summary(scene: &Scene, mesh: &Mesh, out: &Outcome) -> Value {
     })
 }
 
-/// The text of `curve.csv`: header `load_factor,ux_m,uy_m`, one row per converged state of
-/// the capacity search (the first one after gravity, at λ = 0).
-pub fn curve_csv(curve: &crate::analysis::curve::Curve) -> String {
+/// The columns and rows of `curve.csv` (docs/outputs.md, "The capacity curve"): per
+/// converged state, λ and the control block's displacement (m), a push's forces (N) and
+/// moment (N·m), then the top block's displacement (m).
+pub fn curve_table(curve: &crate::analysis::curve::Curve) -> (Vec<String>, Vec<Vec<f64>>) {
     let push = curve.points.iter().any(|p| p.reaction.is_some());
-    let mut s = String::from(if push {
-        "load_factor,ux_m,uy_m,force_x_N,force_y_N,moment_Nm\n"
-    } else {
-        "load_factor,ux_m,uy_m\n"
-    });
-    for p in &curve.points {
-        s.push_str(&format!(
-            "{},{:e},{:e}",
-            p.load_factor, p.displacement[0], p.displacement[1]
-        ));
-        if let Some(r) = p.reaction.filter(|_| push) {
-            s.push_str(&format!(",{:e},{:e},{:e}", r[0], r[1], r[2]));
-        }
+    let mut columns = vec!["load_factor", "ux_m", "uy_m"];
+    if push {
+        columns.extend(["force_x_N", "force_y_N", "moment_Nm"]);
+    }
+    columns.extend(["top_ux_m", "top_uy_m"]);
+    let rows = curve
+        .points
+        .iter()
+        .map(|p| {
+            let mut r = vec![p.load_factor, p.displacement[0], p.displacement[1]];
+            if push {
+                r.extend(p.reaction.unwrap_or([0.0; 3]));
+            }
+            r.extend(p.top);
+            r
+        })
+        .collect();
+    (columns.into_iter().map(String::from).collect(), rows)
+}
+
+/// The text of `curve.csv` ([`curve_table`]): λ as written by `{}`, the rest in `{:e}`,
+/// both the shortest text that reads back to the same number.
+pub fn curve_csv(curve: &crate::analysis::curve::Curve) -> String {
+    let (columns, rows) = curve_table(curve);
+    let mut s = columns.join(",");
+    s.push('\n');
+    for r in rows {
+        let cells: Vec<String> = r
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                if i == 0 {
+                    format!("{v}")
+                } else {
+                    format!("{v:e}")
+                }
+            })
+            .collect();
+        s.push_str(&cells.join(","));
         s.push('\n');
     }
     s
@@ -212,26 +251,20 @@ pub fn write_figures(
     formats: &[figures::Format],
 ) -> Result<Vec<std::path::PathBuf>> {
     let fig = figures::Deformed::from_run(scene, mesh, out);
-    // a displacement-controlled run's curve is not drawn (its load is a force, not λ)
-    let capacity = out
-        .capacity_curve
-        .as_ref()
-        .filter(|c| c.points.iter().all(|p| p.reaction.is_none()));
-    let rows: Option<Vec<[f64; 3]>> = capacity.map(|c| {
-        c.points
-            .iter()
-            .map(|p| [p.load_factor, p.displacement[0], p.displacement[1]])
-            .collect()
+    // the figure drawn from what curve.csv holds, so that `dfem plot` draws the same
+    let curve = out.capacity_curve.as_ref().and_then(|c| {
+        let (columns, rows) = curve_table(c);
+        figures::CurveFigure::from_columns(
+            &columns,
+            &rows,
+            &scene.blocks[c.control_block].name,
+            &scene.blocks[c.top_block].name,
+        )
     });
-    let control = out
-        .capacity_curve
-        .as_ref()
-        .map(|c| scene.blocks[c.control_block].name.as_str())
-        .unwrap_or("");
     figures::write_figures(
         dir,
         &fig,
-        rows.as_deref().map(|r| (r, control)),
+        curve.as_ref(),
         out.history.as_ref().filter(|h| !h.rows.is_empty()),
         amplification,
         formats,

@@ -202,13 +202,10 @@ fn numeric_csv(dir: &Path, name: &str, min_cols: usize) -> Result<Option<History
     }))
 }
 
-/// Read `DIR/curve.csv` (header `load_factor,ux_m,uy_m`) if it exists: (λ, ux, uy) rows.
-/// The curve of a displacement-controlled run (with a `force_x_N` column) is not a
-/// capacity curve and is not drawn: `None`.
-pub fn curve(dir: &Path) -> Result<Option<Vec<[f64; 3]>>> {
-    Ok(numeric_csv(dir, "curve.csv", 3)?
-        .filter(|h| !h.columns.iter().any(|c| c == "force_x_N"))
-        .map(|h| h.rows.iter().map(|v| [v[0], v[1], v[2]]).collect()))
+/// Read `DIR/curve.csv` (docs/outputs.md, "The capacity curve") if it exists: its
+/// columns and rows.
+pub fn curve(dir: &Path) -> Result<Option<History>> {
+    numeric_csv(dir, "curve.csv", 3)
 }
 
 /// Read `DIR/history.csv` (a dynamic run's, docs/outputs.md) if it exists.

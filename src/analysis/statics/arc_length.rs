@@ -953,6 +953,9 @@ pub(super) fn run(
                     2 => " (the cylinder and displacement control of the block tried)",
                     _ => " (the dissipation, displacement control of the block and the cylinder tried)",
                 };
+                if let StepFailure::NoConvergence(r, _) = why {
+                    d.path_stall = Some(r);
+                }
                 let why = match why {
                     StepFailure::NoConvergence(r, _) => format!("the out-of-balance force stays at {r:.2e} of the load along the arc{what}"),
                     StepFailure::Divergence => format!("the displacements grow without bound along the arc{what}: the blocks move without restraint"),

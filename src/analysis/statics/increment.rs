@@ -56,21 +56,22 @@ impl Increment<'_, '_> {
             }
             Ending::Stopped => Ok(Err((
                 IncrementFailure::Divergence,
-                d.failure(dq, &trial, f_ext),
+                d.failure(dq, &trial, f_ext, true),
             ))),
             Ending::Stalled | Ending::Exhausted => {
                 let r = d.out_of_balance(f_ext, &trial.f_int);
                 let residual = Driver::norm(&r) / scale;
                 // the mechanism: the null space of the secant matrix when it is singular,
                 // else the increment itself
-                let mode = if singular_streak > 0 && d.settings.strategy != Strategy::Initial {
+                let singular = singular_streak > 0;
+                let mode = if singular && d.settings.strategy != Strategy::Initial {
                     d.mechanism_mode(&trial, &r)?
                 } else {
                     dq
                 };
                 Ok(Err((
                     IncrementFailure::NoConvergence { residual },
-                    d.failure(mode, &trial, f_ext),
+                    d.failure(mode, &trial, f_ext, singular),
                 )))
             }
         }

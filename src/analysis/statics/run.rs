@@ -12,6 +12,10 @@ use super::*;
 pub(super) const FALLOUT_MAX_BLOCKS: usize = 8;
 /// See [`FALLOUT_MAX_BLOCKS`].
 pub(super) const FALLOUT_MAX_SHARE: f64 = 0.01;
+/// A push whose force along the push ends more than this fraction below its peak on the
+/// path has passed its peak: a mechanism, however its last increment ended
+/// (docs/decisions/0037-stall-or-mechanism.md).
+const PEAK_DROP: f64 = 1e-3;
 
 impl Driver<'_> {
     /// A phase starts: `name` for the progress report, `increments` planned (if known),
@@ -120,7 +124,8 @@ impl Driver<'_> {
                             last = None;
                             continue;
                         }
-                        return Ok((s, Some(describe(&why))));
+                        let held = self.failure_mode.as_ref().is_some_and(|f| !f.mechanism);
+                        return Ok((s, Some(describe(&why, held))));
                     }
                     cuts += 1;
                     self.stats.load_cuts += 1;
@@ -208,15 +213,13 @@ impl Driver<'_> {
         s: f64,
         reaction: Option<[f64; 3]>,
     ) -> crate::analysis::curve::CurvePoint {
+        let at =
+            |b: usize| crate::analysis::curve::block_displacement(&self.cur, &self.committed.u, b);
         crate::analysis::curve::CurvePoint {
             load_factor: s,
-            displacement: crate::analysis::curve::control_displacement(
-                &self.cur,
-                &self.cur,
-                &self.committed.u,
-                block,
-            ),
+            displacement: at(block),
             reaction: Some(reaction.unwrap_or([0.0; 3])),
+            top: at(self.top_block.unwrap_or(block)),
         }
     }
 
@@ -263,8 +266,11 @@ impl Driver<'_> {
     }
 }
 
-pub(super) fn describe(why: &IncrementFailure) -> String {
+/// Why an increment failed, in words; `held`: every contact of its last trial sticks
+/// ([`Failure::mechanism`] false), so that the contacts are not what gives way.
+pub(super) fn describe(why: &IncrementFailure, held: bool) -> String {
     match why {
+        IncrementFailure::NoConvergence { residual } if held => format!("the out-of-balance force stays at {residual:.2e} of the load with every contact sticking: the iterations stopped converging"),
         IncrementFailure::NoConvergence { residual } => format!("the out-of-balance force stays at {residual:.2e} of the load: the contacts cannot hold it"),
         IncrementFailure::Divergence => "the displacements grow without bound: the blocks move without restraint".to_string(),
     }
@@ -297,9 +303,20 @@ fn finish(
     d.outcome(status, mesh, lf, mech)
 }
 
-/// The outcome of a run that failed (`what`, at load factor `lf`), with its mechanism
-/// classified from the last failing increment.
+/// The outcome of a run whose increment failed (`what`: where, e.g. "under gravity at
+/// 40 % of the self-weight: why", at load factor `lf`): a failure with its mechanism
+/// classified from the last failing increment, or, where that increment shows no
+/// mechanism ([`Failure::mechanism`]), iterations that stopped converging.
 fn fail(d: &mut Driver, mesh: &Mesh, start: Instant, what: String, lf: Option<f64>) -> Outcome {
+    if let Some(f) = d.failure_mode.as_ref().filter(|f| !f.mechanism) {
+        let status = Status::NotConverged {
+            reason: format!("did not converge {what}"),
+            residual: f.residual,
+            block: f.worst,
+        };
+        return finish(d, mesh, start, status, lf, None);
+    }
+    let what = format!("failed {what}");
     let mech = d
         .failure_mode
         .as_ref()
@@ -351,6 +368,22 @@ pub fn run_with_progress<'a>(
         AnalysisType::Capacity => capacity_search(d, mesh, start),
         AnalysisType::Dynamic => unreachable!("the dynamic driver runs elsewhere"),
     }
+}
+
+/// [`fail`] where the run has shown a mechanism already (a push past its peak, a
+/// capacity search with a failed probe that showed one): a failure, its mechanism
+/// classified from the last failing increment whatever that increment showed itself.
+fn fail_mechanism(
+    d: &mut Driver,
+    mesh: &Mesh,
+    start: Instant,
+    what: String,
+    lf: Option<f64>,
+) -> Outcome {
+    if let Some(f) = d.failure_mode.as_mut() {
+        f.mechanism = true;
+    }
+    fail(d, mesh, start, what, lf)
 }
 
 /// Groups of blocks with no chain of contacts down to a fixed block fall: a result.
@@ -453,7 +486,7 @@ fn gravity_phase(
             d,
             mesh,
             start,
-            format!("failed under gravity at {:.1} % {of}: {why}", 100.0 * s),
+            format!("under gravity at {:.1} % {of}: {why}", 100.0 * s),
             None,
         )));
     }
@@ -493,7 +526,7 @@ fn prescribed_phase(
                 mesh,
                 start,
                 format!(
-                    "failed at {:.1} % of the prescribed displacement: {why}",
+                    "at {:.1} % of the prescribed displacement: {why}",
                     100.0 * s
                 ),
                 None,
@@ -527,6 +560,8 @@ fn push_phase(d: &mut Driver, mesh: &Mesh, start: Instant, push: &Push) -> Resul
         record: Some(push.block),
     };
     d.begin_phase("push", Some(steps), 1.0);
+    // the failures of the earlier phases' cut increments are not the push's
+    d.failure_mode = None;
     let (s, why, increments, accepted) = match d.settings.arc {
         Some(arc) => arc_length::run(d, &phase.base, push, &arc, steps)?,
         None => {
@@ -550,6 +585,7 @@ fn push_phase(d: &mut Driver, mesh: &Mesh, start: Instant, push: &Push) -> Resul
     });
     let curve = crate::analysis::curve::Curve {
         control_block: push.block,
+        top_block: d.top_block.unwrap_or(push.block),
         points,
         path: Some(crate::analysis::curve::PushPath {
             reached: s,
@@ -560,18 +596,29 @@ fn push_phase(d: &mut Driver, mesh: &Mesh, start: Instant, push: &Push) -> Resul
             end: why.clone().unwrap_or_else(|| "the end of the push".into()),
         }),
     };
-    let mut out = match why {
-        Some(why) => fail(
-            d,
-            mesh,
-            start,
-            format!(
-                "failed at {:.1} % of the push displacement: {why}",
-                100.0 * s
-            ),
-            None,
-        ),
-        None => finish(d, mesh, start, Status::Stable, None, None),
+    // past the peak of the force along the push, the structure is giving way whatever
+    // stopped the path: a mechanism (docs/decisions/0037-stall-or-mechanism.md)
+    let along = |p: &crate::analysis::curve::CurvePoint| {
+        p.reaction.map_or(0.0, |r| r[0] * dir[0] + r[1] * dir[1])
+    };
+    let peak = curve.points.iter().map(along).fold(0.0f64, f64::max);
+    let past_peak = curve
+        .points
+        .last()
+        .is_some_and(|p| along(p) < (1.0 - PEAK_DROP) * peak);
+    let what = |why: &str| format!("at {:.1} % of the push displacement: {why}", 100.0 * s);
+    let mut out = match (why, d.path_stall.take()) {
+        (Some(why), Some(residual)) if !past_peak => {
+            let status = Status::NotConverged {
+                reason: format!("did not converge {}", what(&why)),
+                residual,
+                block: None,
+            };
+            finish(d, mesh, start, status, None, None)
+        }
+        (Some(why), _) if past_peak => fail_mechanism(d, mesh, start, what(&why), None),
+        (Some(why), _) => fail(d, mesh, start, what(&why), None),
+        (None, _) => finish(d, mesh, start, Status::Stable, None, None),
     };
     out.capacity_curve = Some(curve);
     Ok(out)
@@ -603,7 +650,7 @@ fn lateral_phase(d: &mut Driver, mesh: &Mesh, start: Instant) -> Result<Outcome>
                 mesh,
                 start,
                 format!(
-                    "failed at a lateral coefficient of {:.4}: {why}",
+                    "at a lateral coefficient of {:.4}: {why}",
                     s * scene.analysis.lateral
                 ),
                 Some(s * scene.analysis.lateral),
@@ -635,15 +682,15 @@ fn capacity_search(d: &mut Driver, mesh: &Mesh, start: Instant) -> Result<Outcom
     let mut last: Option<(f64, Vec<f64>)> = None;
     d.begin_phase("capacity", None, 1.0);
     let control = crate::analysis::curve::control_block(mesh);
-    let curve_point = |d: &Driver, lambda: f64, block: usize| crate::analysis::curve::CurvePoint {
-        load_factor: lambda,
-        displacement: crate::analysis::curve::control_displacement(
-            mesh,
-            &d.cur,
-            &d.committed.u,
-            block,
-        ),
-        reaction: None,
+    let curve_point = |d: &Driver, lambda: f64, block: usize| {
+        let displacement =
+            crate::analysis::curve::control_displacement(mesh, &d.cur, &d.committed.u, block);
+        crate::analysis::curve::CurvePoint {
+            load_factor: lambda,
+            displacement,
+            reaction: None,
+            top: displacement,
+        }
     };
     let mut curve: Vec<crate::analysis::curve::CurvePoint> = control
         .map(|b| curve_point(d, 0.0, b))
@@ -659,6 +706,9 @@ fn capacity_search(d: &mut Driver, mesh: &Mesh, start: Instant) -> Result<Outcom
     // full windows from λ (where it then converges, the search goes on above it).
     // `upper_full`: the failure that set `upper` had the full windows.
     let mut upper_full = false;
+    // a failed probe showed a mechanism ([`Failure::mechanism`]): without one the search
+    // ends as not converged, whatever its bracket
+    let mut mechanism = false;
     loop {
         let narrow = upper.is_finite()
             && upper - lambda <= d.settings.bracket * lambda.max(d.settings.initial_step * 1e-3);
@@ -704,20 +754,22 @@ fn capacity_search(d: &mut Driver, mesh: &Mesh, start: Instant) -> Result<Outcom
                 }
             }
             Err((why, dq)) => {
-                d.failure_mode = Some(dq);
+                let dq = d.failure_mode.insert(dq);
                 if target < upper {
                     upper_full = !d.probing;
                 } else {
                     upper_full |= !d.probing;
                 }
                 upper = upper.min(target);
-                last_fail = Some(describe(&why));
+                mechanism |= dq.mechanism;
+                last_fail = Some(describe(&why, !dq.mechanism));
                 step = 0.5 * (target - lambda);
             }
         }
     }
     let curve = control.map(|control_block| crate::analysis::curve::Curve {
         control_block,
+        top_block: control_block,
         points: curve,
         path: None,
     });
@@ -726,16 +778,26 @@ fn capacity_search(d: &mut Driver, mesh: &Mesh, start: Instant) -> Result<Outcom
         out.capacity_curve = curve;
         return Ok(out);
     }
-    let mut out = fail(
-        d,
-        mesh,
-        start,
-        format!(
-            "critical load factor {lambda:.6} (bracket [{lambda:.6}, {upper:.6}]): {}",
-            last_fail.unwrap_or_default()
-        ),
-        Some(lambda),
-    );
+    let why = last_fail.unwrap_or_default();
+    let mut out = if mechanism {
+        fail_mechanism(
+            d,
+            mesh,
+            start,
+            format!("at the critical load factor {lambda:.6} (bracket [{lambda:.6}, {upper:.6}]): {why}"),
+            Some(lambda),
+        )
+    } else {
+        let f = d.failure_mode.as_ref();
+        let status = Status::NotConverged {
+            reason: format!(
+                "did not converge above the load factor {lambda:.6} (bracket [{lambda:.6}, {upper:.6}]): {why}"
+            ),
+            residual: f.map_or(0.0, |f| f.residual),
+            block: f.and_then(|f| f.worst),
+        };
+        finish(d, mesh, start, status, Some(lambda), None)
+    };
     out.load_factor = Some(lambda);
     out.capacity_curve = curve;
     Ok(out)

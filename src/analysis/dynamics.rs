@@ -72,7 +72,9 @@ mod run;
 mod step;
 mod step_try;
 
-pub use run::{run, run_from, step_count, step_time, tracked};
+pub use run::{
+    run, run_from, step_count, step_time, tracked, FrameSchedule, FRAME_INTERVAL, MAX_FRAMES,
+};
 
 /// Open/closed changes of a contact within a step after which its normal spring stays
 /// in the matrix (see [`Dynamics::step`]).

@@ -167,7 +167,7 @@ pub trait Monitor {
     fn wants_frames(&self) -> bool {
         false
     }
-    /// The full state at a frame (every `[output] every` steps).
+    /// The full state at a frame (at the steps of [`FrameSchedule`]).
     fn frame(&mut self, _step: usize, _time: f64, _state: &Outcome) -> Result<()> {
         Ok(())
     }

@@ -144,6 +144,8 @@ cases! {
     tension_cut_off_beyond_apex,
     all_fixed,
     checkpoint_every_zero,
+    frame_interval_zero,
+    every_and_frame_interval,
     in_situ_without_stress,
     degenerate_collinear,
     degenerate_two_vertices,

@@ -73,7 +73,9 @@ mod run;
 mod step;
 mod step_try;
 
-pub use run::{run, run_from, step_count, step_time, tracked};
+pub use run::{
+    run, run_from, step_count, step_time, tracked, FrameSchedule, FRAME_INTERVAL, MAX_FRAMES,
+};
 
 /// Open/closed changes of a contact within a step after which its normal spring stays
 /// in the matrix (see [`Dynamics::step`]).
@@ -161,7 +163,7 @@ pub trait Monitor {
     fn wants_frames(&self) -> bool {
         false
     }
-    /// The full state at a frame (every `[output] every` steps).
+    /// The full state at a frame (at the steps of [`FrameSchedule`]).
     fn frame(&mut self, _step: usize, _time: f64, _state: &Outcome) -> Result<()> {
         Ok(())
     }

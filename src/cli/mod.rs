@@ -75,6 +75,11 @@ enum Command {
         /// memory the machine has available).
         #[arg(long, value_name = "MB")]
         memory_limit: Option<f64>,
+        /// Dynamic: write N ParaView frames after the one at t = 0, at t = j duration / N,
+        /// instead of the scene's `[output]` rule (a run resumed with --resume takes the
+        /// same N).
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+        frames: Option<u32>,
     },
     /// Draw the figures of a finished run again from the files in DIR, or the run time
     /// against error of a benchmark table saved with --csv (DIR is then FILE.csv).
@@ -285,21 +290,37 @@ pub fn not_converged_advice(
     )
 }
 
+/// The scene of `dfem run`: `file` or the built-in `example`, its frames those of
+/// `--frames N` when given.
+fn run_scene(
+    file: Option<&Path>,
+    example: Option<&str>,
+    frames: Option<u32>,
+) -> Result<scene::Scene> {
+    let mut sc = read_scene(file, example)?;
+    if let Some(n) = frames {
+        sc.output.frames = scene::Frames::Count(n as usize);
+    }
+    Ok(sc)
+}
+
 /// The scene a checkpoint was run with: `given` when there is one (it must be the same),
-/// otherwise the file (or built-in example) the checkpoint names.
+/// otherwise the file (or built-in example) the checkpoint names; with `--frames N` as it
+/// was run.
 fn resumed_scene(
     dir: &Path,
     saved: &crate::analysis::checkpoint::Saved,
     file: Option<&Path>,
     example: Option<&str>,
+    frames: Option<u32>,
 ) -> Result<scene::Scene> {
     use crate::analysis::checkpoint;
     let sc = if file.is_some() || example.is_some() {
-        read_scene(file, example)?
+        run_scene(file, example, frames)?
     } else if let Some(name) = saved.source.strip_prefix("example:") {
-        read_scene(None, Some(name))?
+        run_scene(None, Some(name), frames)?
     } else {
-        read_scene(Some(Path::new(&saved.source)), None)?
+        run_scene(Some(Path::new(&saved.source)), None, frames)?
     };
     if checkpoint::fingerprint(&sc) != saved.fingerprint {
         return Err(Error::new(format!(
@@ -307,7 +328,7 @@ fn resumed_scene(
             saved.source
         ))
         .file(dir.join(checkpoint::FILE))
-        .fix("resume with the scene as it was run, or run this scene without --resume (into another --out directory to keep these results)"));
+        .fix("resume with the scene (and --frames N) as it was run, or run this scene without --resume (into another --out directory to keep these results)"));
     }
     Ok(sc)
 }
@@ -328,6 +349,7 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             amplification,
             log_json,
             memory_limit,
+            frames,
         } => {
             threads(n)?;
             check_amplification(amplification)?;
@@ -344,8 +366,8 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             let saved = resume.as_deref().map(output::read_checkpoint).transpose()?;
             let out = out.or(resume).expect("clap requires --out or --resume");
             let sc = match &saved {
-                Some(s) => resumed_scene(&out, s, file.as_deref(), example.as_deref())?,
-                None => read_scene(file.as_deref(), example.as_deref())?,
+                Some(s) => resumed_scene(&out, s, file.as_deref(), example.as_deref(), frames)?,
+                None => run_scene(file.as_deref(), example.as_deref(), frames)?,
             };
             if !quiet {
                 for w in &sc.warnings {
@@ -384,16 +406,20 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                     Some(s) => {
                         let mut w = output::StreamWriter::resuming(&out, &sc, &m, &s.state)?
                             .stop_on(stop);
-                        analysis::resume_with(&sc, &m, ranks, backend.as_mut(), &mut w, s.state).map(
-                            |mut o| {
+                        analysis::resume_with(&sc, &m, ranks, backend.as_mut(), &mut w, s.state)
+                            .and_then(|mut o| {
                                 w.complete(&mut o);
-                                o
-                            },
-                        )
+                                w.finish()?;
+                                Ok(o)
+                            })
                     }
                     None => {
                         let mut w = output::StreamWriter::new(&out, &sc, &m)?.stop_on(stop);
                         analysis::run_with(&sc, &m, ranks, backend.as_mut(), &mut prog, &mut w)
+                            .and_then(|o| {
+                                w.finish()?;
+                                Ok(o)
+                            })
                     }
                 }
             } else {
@@ -408,7 +434,12 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
             }
             .map_err(|e| e.in_file(sc.file.as_deref().unwrap_or(Path::new("scene"))))?;
             prog.stage("writing");
-            output::write_all(&out, &sc, &m, &outcome)?;
+            if sc.analysis.kind == scene::AnalysisType::Dynamic {
+                // history.csv is the stream's, every row written
+                output::write_streamed(&out, &sc, &m, &outcome)?;
+            } else {
+                output::write_all(&out, &sc, &m, &outcome)?;
+            }
             if !matches!(outcome.status, analysis::Status::Interrupted { .. }) {
                 // a run that reached its end has nothing to resume
                 let _ = std::fs::remove_file(out.join(analysis::checkpoint::FILE));

@@ -290,27 +290,37 @@ pub fn history_csv(h: &History) -> String {
 }
 
 fn history_line(r: &[f64]) -> String {
-    let mut s = r
-        .iter()
-        .map(|v| format!("{v:.9e}"))
-        .collect::<Vec<_>>()
-        .join(",");
+    use std::fmt::Write;
+    // one string for the row (not one per value): the history is written at every step
+    let mut s = String::with_capacity(17 * r.len());
+    for (i, v) in r.iter().enumerate() {
+        if i > 0 {
+            s.push(',');
+        }
+        let _ = write!(s, "{v:.9e}");
+    }
     s.push('\n');
     s
 }
 
 /// Streams a dynamic run to `dir` as it goes: history.csv grows by one line per time step,
-/// each written by a single unbuffered write (so a run killed at any moment leaves whole
-/// rows; [`write_all`] rewrites it atomically at the end); a ParaView frame is written
-/// every `[output] every` steps (each .vtu atomically, then the .pvd that lists it); a
-/// checkpoint ([`checkpoint::FILE`]) and a summary with status "running" at the start and
-/// then every `[output] checkpoint_every` steps (default every [`CHECKPOINT_SECONDS`] s).
+/// buffered and flushed in whole lines (so a run killed at any moment leaves whole rows,
+/// all of them up to the last checkpoint; [`write_streamed`] keeps it at the end); a
+/// ParaView frame at each step of the run's
+/// [`FrameSchedule`](crate::analysis::dynamics::FrameSchedule) (each .vtu atomically),
+/// the .pvd that lists them rewritten atomically whenever their number has doubled since
+/// it was last written and at each checkpoint, so that its cost is linear in the frames
+/// (docs/decisions/0038-frames-by-simulated-time.md); a checkpoint ([`checkpoint::FILE`])
+/// and a summary with status "running" at the start and then every `[output]
+/// checkpoint_every` steps (default every [`CHECKPOINT_SECONDS`] s).
 pub struct StreamWriter<'a> {
     dir: std::path::PathBuf,
     scene: &'a Scene,
     mesh: &'a Mesh,
-    file: Option<std::fs::File>,
+    file: Option<std::io::BufWriter<std::fs::File>>,
     frames: Vec<(f64, usize)>,
+    /// The number of frames results.pvd lists.
+    listed: usize,
     /// Where the scene came from and its fingerprint, stored with each checkpoint.
     source: String,
     fingerprint: u64,
@@ -364,6 +374,7 @@ impl<'a> StreamWriter<'a> {
             mesh,
             file: None,
             frames: Vec::new(),
+            listed: 0,
             source: scene_source(scene),
             fingerprint: checkpoint::fingerprint(scene),
             last_checkpoint: Instant::now(),
@@ -413,15 +424,16 @@ impl<'a> StreamWriter<'a> {
         }
         write_atomic(&path, kept.as_bytes())?;
         let settings = scene.analysis.settings.dynamics()?.clone();
-        let every = scene.output.every.max(1);
-        if !c.step.is_multiple_of(every) {
+        let schedule =
+            crate::analysis::dynamics::FrameSchedule::new(&settings, scene.output.frames);
+        if !schedule.due(c.step) {
             // the final state an interrupted run wrote between two frames
             for part in ["blocks", "contacts"] {
                 let _ = std::fs::remove_file(dir.join(format!("{part}_{:04}.vtu", c.step)));
             }
         }
         let frames: Vec<(f64, usize)> = (0..=c.step)
-            .filter(|k| k.is_multiple_of(every) && dir.join(format!("blocks_{k:04}.vtu")).exists())
+            .filter(|&k| schedule.due(k) && dir.join(format!("blocks_{k:04}.vtu")).exists())
             .map(|k| (crate::analysis::dynamics::step_time(&settings, k), k))
             .collect();
         w.frames = frames.clone();
@@ -435,6 +447,25 @@ impl<'a> StreamWriter<'a> {
         if let (Some(b), Some(h)) = (&self.resumed, out.history.as_mut()) {
             h.rows.splice(0..0, b.rows.iter().cloned());
             h.frames.splice(0..0, b.frames.iter().copied());
+        }
+    }
+
+    /// Write results.pvd with every frame written so far, unless it lists them already.
+    fn list_frames(&mut self) -> Result<()> {
+        if self.listed < self.frames.len() {
+            vtk::write_pvd(&self.dir, &self.frames)?;
+            self.listed = self.frames.len();
+        }
+        Ok(())
+    }
+
+    /// Flush history.csv: after a run that ended (completed, failed or interrupted) it
+    /// then holds every row of the outcome's history, which [`write_streamed`] keeps.
+    pub fn finish(&mut self) -> Result<()> {
+        use std::io::Write;
+        match self.file.as_mut().map(|f| f.flush()) {
+            Some(Err(e)) => Err(self.io(e)),
+            _ => Ok(()),
         }
     }
 
@@ -454,10 +485,11 @@ impl Monitor for StreamWriter<'_> {
                 .append(true)
                 .open(&path)
                 .map_err(|e| self.io(e))?;
-            self.file = Some(f);
+            self.file = Some(std::io::BufWriter::new(f));
             return Ok(());
         }
-        let mut f = std::fs::File::create(&path).map_err(|e| self.io(e))?;
+        let f = std::fs::File::create(&path).map_err(|e| self.io(e))?;
+        let mut f = std::io::BufWriter::new(f);
         writeln!(f, "{}", columns.join(",")).map_err(|e| self.io(e))?;
         self.file = Some(f);
         Ok(())
@@ -466,7 +498,8 @@ impl Monitor for StreamWriter<'_> {
         use std::io::Write;
         let line = history_line(row);
         if let Some(f) = self.file.as_mut() {
-            // one write of the whole line: a killed run leaves whole rows
+            // whole lines into the buffer, which writes only whole lines: a killed run
+            // leaves whole rows
             let r = f.write_all(line.as_bytes());
             if let Err(e) = r {
                 return Err(self.io(e));
@@ -485,6 +518,14 @@ impl Monitor for StreamWriter<'_> {
             }
     }
     fn checkpoint(&mut self, c: &Checkpoint, state: &Outcome) -> Result<()> {
+        use std::io::Write;
+        // the rows and frames up to the checkpoint's step on disk before the checkpoint
+        if let Some(f) = self.file.as_mut() {
+            if let Err(e) = f.flush() {
+                return Err(self.io(e));
+            }
+        }
+        self.list_frames()?;
         let bytes = checkpoint::encode(&self.source, self.fingerprint, c);
         write_atomic(&self.dir.join(checkpoint::FILE), &bytes)?;
         let mut s = summary(self.scene, self.mesh, state);
@@ -504,12 +545,31 @@ impl Monitor for StreamWriter<'_> {
     fn frame(&mut self, step: usize, time: f64, state: &Outcome) -> Result<()> {
         vtk::write_step(&self.dir, step, time, self.scene, self.mesh, state)?;
         self.frames.push((time, step));
-        vtk::write_pvd(&self.dir, &self.frames)
+        if self.frames.len() >= 2 * self.listed {
+            self.list_frames()?;
+        }
+        Ok(())
     }
 }
 
 /// Write every result of a run into `dir`.
 pub fn write_all(dir: &Path, scene: &Scene, mesh: &Mesh, out: &Outcome) -> Result<()> {
+    write_results(dir, scene, mesh, out, false)
+}
+
+/// [`write_all`] after a dynamic run streamed by a [`StreamWriter`] and its
+/// [`StreamWriter::finish`]: history.csv, whole, is not formatted and written again.
+pub fn write_streamed(dir: &Path, scene: &Scene, mesh: &Mesh, out: &Outcome) -> Result<()> {
+    write_results(dir, scene, mesh, out, true)
+}
+
+fn write_results(
+    dir: &Path,
+    scene: &Scene,
+    mesh: &Mesh,
+    out: &Outcome,
+    streamed: bool,
+) -> Result<()> {
     create_dir(dir)?;
     match &out.history {
         None => {
@@ -519,7 +579,9 @@ pub fn write_all(dir: &Path, scene: &Scene, mesh: &Mesh, out: &Outcome) -> Resul
             }
         }
         Some(h) => {
-            write_atomic(&dir.join("history.csv"), history_csv(h).as_bytes())?;
+            if !streamed {
+                write_atomic(&dir.join("history.csv"), history_csv(h).as_bytes())?;
+            }
             if scene.output.vtk {
                 // the frames a monitor wrote, and the final state in any case (at the
                 // step it reached: a failed or interrupted run may end between frames)

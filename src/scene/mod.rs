@@ -240,12 +240,30 @@ pub struct Output {
     pub track: Vec<String>,
     /// Write ParaView files (default true).
     pub vtk: bool,
-    /// Dynamic: a ParaView frame every this many time steps (default 1).
-    pub every: usize,
+    /// Dynamic: when the ParaView frames are written (`every`, `frame_interval`, or
+    /// `dfem run --frames N`).
+    pub frames: Frames,
     /// Dynamic: a checkpoint (`checkpoint.bin`, for `dfem run --resume`) every this many
     /// time steps; `None` (default): every [`crate::output::CHECKPOINT_SECONDS`] s of
     /// wall time.
     pub checkpoint_every: Option<usize>,
+}
+
+/// When a dynamic run writes its ParaView frames: always at t = 0 and at the last step
+/// reached, and in between by this rule (docs/scene-reference.md, "`[output]`").
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Frames {
+    /// Neither `every` nor `frame_interval`: one frame per
+    /// [`crate::analysis::dynamics::FRAME_INTERVAL`] s of simulated time, the interval
+    /// widened so that at most [`crate::analysis::dynamics::MAX_FRAMES`] follow t = 0.
+    #[default]
+    Default,
+    /// `every = k`: at every k-th time step.
+    Steps(usize),
+    /// `frame_interval = s`: one frame per s seconds of simulated time.
+    Interval(f64),
+    /// `dfem run --frames N`: N frames after t = 0, evenly in simulated time.
+    Count(usize),
 }
 
 /// A validated scene.

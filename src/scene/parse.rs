@@ -147,6 +147,7 @@ struct RawOutput {
     track: Option<Vec<String>>,
     vtk: Option<bool>,
     every: Option<i64>,
+    frame_interval: Option<f64>,
     checkpoint_every: Option<i64>,
 }
 

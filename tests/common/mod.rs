@@ -277,6 +277,12 @@ pub fn rigid_plastic_sliding_step(
 /// A rigid 1 m × 0.5 m box on a fixed base 40 m wide (the base moves with the ground in
 /// the absolute frame), friction tan φ = `mu`.
 pub fn box_on_base(mu: f64, analysis: &str) -> String {
+    box_on_base_with(mu, "[output]\ntrack = [\"box\"]\nvtk = false\n", analysis)
+}
+
+/// [`box_on_base`] with `output` (the `[output]` table, or nothing) in place of its
+/// history-only output.
+pub fn box_on_base_with(mu: f64, output: &str, analysis: &str) -> String {
     format!(
         r#"{}
 [[block]]
@@ -289,9 +295,7 @@ name = "box"
 material = "rock"
 kind = "rigid"
 vertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]
-[output]
-track = ["box"]
-vtk = false
+{output}
 {analysis}"#,
         rock_and_joint(mu.atan().to_degrees())
     )

@@ -2,6 +2,7 @@
 //! steps of the record, the history rows, frames and checkpoints handed to the monitor.
 
 use super::*;
+use crate::scene::Frames;
 
 /// Blocks written to the history: `[output] track`, or every free block.
 pub fn tracked(scene: &Scene, mesh: &Mesh) -> Vec<usize> {
@@ -27,6 +28,68 @@ pub fn step_time(settings: &Settings, k: usize) -> f64 {
 /// The number of time steps of a run.
 pub fn step_count(settings: &Settings) -> usize {
     (settings.duration / settings.dt - 1e-9).ceil().max(1.0) as usize
+}
+
+/// Default interval (s of simulated time) between ParaView frames
+/// (docs/decisions/0038-frames-by-simulated-time.md).
+pub const FRAME_INTERVAL: f64 = 0.02;
+
+/// Most frames after t = 0 that the default interval gives: a longer run widens it to
+/// duration / MAX_FRAMES (docs/decisions/0038-frames-by-simulated-time.md).
+pub const MAX_FRAMES: usize = 500;
+
+/// The steps of a run at which a ParaView frame is written (docs/scene-reference.md,
+/// "`[output]`"): step 0, the last step, and in between every k-th step (`every = k`) or
+/// the first step ending at or after each frame time j·I (j = 1, 2, …; to within
+/// 10⁻⁶ I, so that j·I computed in floating point is not missed by a rounding).
+#[derive(Debug, Clone, Copy)]
+pub struct FrameSchedule {
+    /// `every = k`: k; otherwise `None` and `interval` rules.
+    every: Option<usize>,
+    /// I (s).
+    interval: f64,
+    steps: usize,
+    dt: f64,
+    duration: f64,
+}
+
+impl FrameSchedule {
+    /// The schedule of `frames` for a run with `settings`: I = `frame_interval`,
+    /// duration / N (`--frames N`), or by default max([`FRAME_INTERVAL`], duration /
+    /// [`MAX_FRAMES`]).
+    pub fn new(settings: &Settings, frames: Frames) -> Self {
+        let duration = settings.duration.max(settings.dt);
+        let (every, interval) = match frames {
+            Frames::Steps(k) => (Some(k.max(1)), 0.0),
+            Frames::Interval(i) => (None, i),
+            Frames::Count(n) => (None, duration / n.max(1) as f64),
+            Frames::Default => (None, FRAME_INTERVAL.max(duration / MAX_FRAMES as f64)),
+        };
+        FrameSchedule {
+            every,
+            interval,
+            steps: step_count(settings),
+            dt: settings.dt,
+            duration,
+        }
+    }
+
+    /// The index j of the last frame time j·I reached at time `t`.
+    fn index(&self, t: f64) -> f64 {
+        (t / self.interval + 1e-6).floor()
+    }
+
+    /// Whether step `k` ends with a frame.
+    pub fn due(&self, k: usize) -> bool {
+        if k == 0 || k >= self.steps {
+            return true;
+        }
+        let t = |k: usize| (k as f64 * self.dt).min(self.duration);
+        match self.every {
+            Some(e) => k.is_multiple_of(e),
+            None => self.index(t(k)) > self.index(t(k - 1)),
+        }
+    }
 }
 
 /// Run a dynamic analysis, streaming the history and frames to `monitor`.
@@ -137,7 +200,7 @@ pub fn run_from(
         r
     };
     let steps = step_count(&d.settings);
-    let every = scene.output.every.max(1);
+    let schedule = FrameSchedule::new(&d.settings, scene.output.frames);
     let frames = scene.output.vtk;
     let mut status = Status::Stable;
     if !resumed {
@@ -182,7 +245,7 @@ pub fn run_from(
         let r = row(&d);
         monitor.row(&r)?;
         history.rows.push(r);
-        if frames && (k % every == 0 || k == steps) {
+        if frames && schedule.due(k) {
             history.frames.push((d.time, k));
             if monitor.wants_frames() {
                 monitor.frame(k, d.time, &d.outcome(Status::Stable))?;

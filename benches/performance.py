@@ -21,6 +21,8 @@ Sections:
   capacity  capacity searches against the gravity-only analysis of the same wall
   layer     a new binary against an old one (alternated, paired ratios) on the
             scenes of every analysis type: the cost of a change to the analysis layer
+  output    a dynamic run's output: the 39 s Imperial Valley record at 0.5 ms steps on one
+            block with the default output and without frames (--record names the .AT2)
   p2        the P2 wall (40 x 40 blocks, gravity then 0.3 g) against OpenSees
             (benches/peers/wall_static.py; --python names an interpreter with openseespy)
 """
@@ -212,7 +214,45 @@ def section_p2(args):
     return table(f"p2 --rounds {args.rounds}", loads, columns, "---|---|---:|---:|---:|", rows)
 
 
-SECTIONS = {"capacity": section_capacity, "layer": section_layer, "p2": section_p2}
+def section_output(args):
+    """The time and the files of a long dynamic run with the default output against the
+    same run without ParaView frames (`[output] vtk = false`), alternated: what the
+    output costs. Time is the whole process (the output is written after the analysis
+    timer too)."""
+    if not args.record or not os.path.exists(args.record):
+        sys.exit("output: give the Imperial Valley 1979 record (PEER, not in the repository), --record PATH.AT2")
+    import shutil
+    import time
+
+    scene = os.path.join(ROOT, "benches", "scenes", "block_imperial_valley.toml")
+    rows = []
+    loads = [load()]
+    with tempfile.TemporaryDirectory() as work:
+        shutil.copy(args.record, os.path.join(work, "imperialvalley1979_H-E01140.AT2"))
+        plain = os.path.join(work, "scene.toml")
+        shutil.copy(scene, plain)
+        novtk = os.path.join(work, "novtk.toml")
+        with open(novtk, "w") as f:
+            f.write(open(scene).read() + "\n[output]\nvtk = false\n")
+        times = {plain: [], novtk: []}
+        files = {}
+        for _ in range(args.rounds):
+            for sc in (plain, novtk):
+                out = os.path.join(work, "out")
+                shutil.rmtree(out, ignore_errors=True)
+                t = time.perf_counter()
+                subprocess.run([args.dfem, "run", sc, "--out", out, "--no-plots", "--quiet"], check=True)
+                times[sc].append(time.perf_counter() - t)
+                files[sc] = sum(len(f) for _, _, f in os.walk(out))
+                loads.append(load())
+        a, b = statistics.median(times[plain]), statistics.median(times[novtk])
+        rows.append(f"| default | {files[plain]:,} | {a:.2f} s | {(a - b) / a * 100:.0f} % |")
+        rows.append(f"| `[output] vtk = false` | {files[novtk]:,} | {b:.2f} s | – |")
+    columns = "output | files | run time (process), median | share of the frames"
+    return table(f"output --record PATH.AT2 --rounds {args.rounds}", loads, columns, "---|---:|---:|---:|", rows)
+
+
+SECTIONS = {"capacity": section_capacity, "output": section_output, "layer": section_layer, "p2": section_p2}
 
 
 def write(name, table):
@@ -234,6 +274,7 @@ def main():
     p.add_argument("--dfem", default=os.path.join(ROOT, "target", "release", "dfem"))
     p.add_argument("--old", help="the binary to compare with (section layer)")
     p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--record", help="the Imperial Valley 1979 .AT2 record (section output)")
     p.add_argument("--python", default=sys.executable, help="a Python with openseespy (section p2)")
     p.add_argument("--write", action="store_true", help="write the tables into docs/performance.md")
     args = p.parse_args()

@@ -97,6 +97,40 @@ pub fn backtrack<T>(
     best
 }
 
+/// What [`safeguard`] keeps where the step along an iteration's first correction does not
+/// lower the out-of-balance norm.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Keep {
+    /// The better of the two steps (the static iterations).
+    Better,
+    /// The alternative's step (a time step's iterations: the secant step after a tangent
+    /// one that does not lower the norm).
+    Alternative,
+}
+
+/// The safeguard of an iteration: the step along its first correction (out-of-balance
+/// norm N, and what was evaluated; `None`: no such step) is taken where it lowers the
+/// norm below `rn` (N); elsewhere the step along the alternative correction
+/// (`alternative()`: the secant step for a tangent one, the tangent step for a secant one
+/// that is not a descent direction) is tried, and `keep` says which is taken. Returns
+/// the step taken and whether it was the first.
+pub fn safeguard<T>(
+    rn: f64,
+    first: Option<(f64, T)>,
+    keep: Keep,
+    alternative: impl FnOnce() -> Result<Option<(f64, T)>>,
+) -> Result<(Option<(f64, T)>, bool)> {
+    if first.as_ref().is_some_and(|f| f.0 < rn) {
+        return Ok((first, true));
+    }
+    let alt = alternative()?;
+    Ok(match (keep, first, alt) {
+        (Keep::Better, Some(f), Some(a)) if a.0 >= f.0 => (Some(f), true),
+        (Keep::Better, Some(f), None) => (Some(f), true),
+        (_, _, a) => (a, false),
+    })
+}
+
 /// The controls of one call of [`iterate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IterationControls {

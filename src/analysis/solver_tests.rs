@@ -295,3 +295,30 @@ fn backtracking_stops_where_a_step_leaves_the_model() {
     let s = backtrack(4, 0.0, false, |a: f64| (a >= 0.5).then_some((a, a)), drop).unwrap();
     assert_eq!(s.alpha, 0.5);
 }
+
+#[test]
+fn a_safeguard_tries_the_alternative_only_where_the_first_step_fails() {
+    // the first step lowers the norm (0.5 < 1): taken, the alternative never computed
+    let never = || -> Result<Option<(f64, &str)>> { panic!("not needed") };
+    let (kept, first) = safeguard(1.0, Some((0.5, "tangent")), Keep::Better, never).unwrap();
+    assert_eq!((kept, first), (Some((0.5, "tangent")), true));
+    // it does not: the better of the two (Keep::Better) ...
+    let alt = || Ok(Some((1.5, "secant")));
+    let (kept, first) = safeguard(1.0, Some((2.0, "tangent")), Keep::Better, alt).unwrap();
+    assert_eq!((kept, first), (Some((1.5, "secant")), false));
+    let alt = || Ok(Some((3.0, "secant")));
+    let (kept, first) = safeguard(1.0, Some((2.0, "tangent")), Keep::Better, alt).unwrap();
+    assert_eq!((kept, first), (Some((2.0, "tangent")), true));
+    // ... or the alternative's whatever it gives (Keep::Alternative)
+    let alt = || Ok(Some((3.0, "secant")));
+    let (kept, first) = safeguard(1.0, Some((2.0, "tangent")), Keep::Alternative, alt).unwrap();
+    assert_eq!((kept, first), (Some((3.0, "secant")), false));
+    // no first step at all: the alternative's, or nothing
+    let (kept, _) = safeguard(1.0, None, Keep::Better, || Ok(Some((3.0, "secant")))).unwrap();
+    assert_eq!(kept, Some((3.0, "secant")));
+    let (kept, _) = safeguard::<&str>(1.0, None, Keep::Better, || Ok(None)).unwrap();
+    assert_eq!(kept, None);
+    // an alternative that cannot be computed leaves the first (Keep::Better)
+    let (kept, first) = safeguard(1.0, Some((2.0, "tangent")), Keep::Better, || Ok(None)).unwrap();
+    assert_eq!((kept, first), (Some((2.0, "tangent")), true));
+}

@@ -7,7 +7,9 @@
 //! GMRES where the secant iterations are slow, and the step's line search.
 
 use super::*;
-use crate::analysis::solver::{Assessment, Contacts, Ending, Flow, OpenFlips, Problem, Stall};
+use crate::analysis::solver::{
+    self, Assessment, Contacts, Ending, Flow, Keep, OpenFlips, Problem, Stall,
+};
 
 /// The iterate of one try of [`Dynamics::step`].
 pub(super) struct StepTry<'d, 'a> {
@@ -253,25 +255,24 @@ impl Problem for StepTry<'_, '_> {
         let (frozen, terms, dq, dug, size) =
             (&self.frozen, &self.terms, &self.dq, self.dug, self.size);
         // the tangent step where it lowers the out-of-balance force; else the secant step
-        let tangent_step = match tangent {
+        let first = match tangent {
             true => d
                 .tangent_step(
                     trial, blocks, &secant, frozen, terms, dq, bal, it, dug, size,
                 )
-                .filter(|s| s.2.rn < bal.rn),
+                .map(|s| (s.2.rn, s)),
             false => None,
         };
-        self.last_tangent = tangent_step.is_some();
-        let found = match tangent_step {
-            Some(step) => Some(step),
-            None => {
-                let mut x = bal.r.clone();
-                if !d.lin.solve(&mut x) {
-                    return Ok(Flow::Stop);
-                }
-                d.search(terms, dq, &x, bal, it, frozen, dug, size)
+        let (found, tangent_kept) = solver::safeguard(bal.rn, first, Keep::Alternative, || {
+            let mut x = bal.r.clone();
+            if !d.lin.solve(&mut x) {
+                return Ok(None);
             }
-        };
+            Ok(d.search(terms, dq, &x, bal, it, frozen, dug, size)
+                .map(|s| (s.2.rn, s)))
+        })?;
+        self.last_tangent = tangent_kept;
+        let found = found.map(|(_, s)| s);
         let Some((cand, t, b, last)) = found else {
             return Ok(Flow::Stop);
         };

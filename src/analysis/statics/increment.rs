@@ -8,7 +8,9 @@
 //! secant matrix is singular and the search along the free blocks' motion.
 
 use super::*;
-use crate::analysis::solver::{Assessment, Contacts, Ending, Flow, OpenFlips, Problem, Stall};
+use crate::analysis::solver::{
+    self, Assessment, Contacts, Ending, Flow, Keep, OpenFlips, Problem, Stall,
+};
 
 /// The iterate of one increment of [`Driver::iterate`].
 pub(super) struct Increment<'d, 'a> {
@@ -262,7 +264,7 @@ impl Problem for Increment<'_, '_> {
         };
         let dq = &self.dq;
         // line search on the out-of-balance norm
-        let mut best = d.line_search(dq, &delta, rn, f_ext, presc, LINE_SEARCH_STEPS);
+        let best = d.line_search(dq, &delta, rn, f_ext, presc, LINE_SEARCH_STEPS);
         if super::super::tracing() {
             eprintln!(
                 "  step tangent {tangent} singular {} ratio {:.3}",
@@ -270,45 +272,53 @@ impl Problem for Increment<'_, '_> {
                 best.0 / rn
             );
         }
-        if tangent && best.0 >= rn {
+        let trial = &self.trial;
+        let first = Some((best.0, (best.1, best.2)));
+        let kept = if tangent {
             // safeguarded Newton: where the tangent step does not reduce the
             // out-of-balance force (slip/open cycling at a lightly loaded contact), take
-            // the secant step instead
-            let local = d.local_stiffness(&self.trial, &self.trial.state, false);
-            d.assemble_kbuf(local);
-            let x = d.lin.factor_solve(false, r)?;
-            d.lin.hold_secant(&self.trial.state);
-            let x = match x {
-                Some(x) => Some(x),
-                None => d.blended_step(&self.trial, r, BLEND)?,
-            };
-            if let Some(x) = x {
-                let alt = d.line_search(dq, &x, rn, f_ext, presc, LINE_SEARCH_STEPS);
-                if alt.0 < best.0 {
-                    best = alt;
-                }
-            }
-        } else if strategy == Strategy::Secant && self.singular_streak == 0 && best.0 >= rn {
+            // the secant step instead, if it is better
+            solver::safeguard(rn, first, Keep::Better, || {
+                let local = d.local_stiffness(trial, &trial.state, false);
+                d.assemble_kbuf(local);
+                let x = d.lin.factor_solve(false, r)?;
+                d.lin.hold_secant(&trial.state);
+                let x = match x {
+                    Some(x) => Some(x),
+                    None => d.blended_step(trial, r, BLEND)?,
+                };
+                Ok(x.map(|x| {
+                    let (n, t, c) = d.line_search(dq, &x, rn, f_ext, presc, LINE_SEARCH_STEPS);
+                    (n, (t, c))
+                }))
+            })?
+            .0
+        } else if strategy == Strategy::Secant && self.singular_streak == 0 {
             // safeguarded secant: a regular secant step that no step length makes reduce
             // the out-of-balance force is not a descent direction (with many contacts
             // slipping K_s is far from the Jacobian, which couples the friction to the
-            // normal force); take the tangent step where it does
-            if let Some(x) = d
-                .correction(&self.trial, &states, r, true)?
-                .filter(|x| x.iter().all(|v| v.abs() <= 0.5 * size))
-            {
+            // normal force); take the tangent step where it does better
+            solver::safeguard(rn, first, Keep::Better, || {
+                let x = d
+                    .correction(trial, &states, r, true)?
+                    .filter(|x| x.iter().all(|v| v.abs() <= 0.5 * size));
                 // the tangent of the current states is the Jacobian where no contact sits
                 // at a kink of its law, so a short enough step along it lowers the norm:
                 // backtrack further than for the secant step
-                let alt = d.line_search(dq, &x, rn, f_ext, presc, LONG_LINE_SEARCH_STEPS);
-                if super::super::tracing() {
-                    eprintln!("  safeguard tangent ratio {:.3}", alt.0 / rn);
-                }
-                if alt.0 < best.0 {
-                    best = alt;
-                }
-            }
-        }
+                Ok(x.map(|x| {
+                    let (n, t, c) = d.line_search(dq, &x, rn, f_ext, presc, LONG_LINE_SEARCH_STEPS);
+                    if super::super::tracing() {
+                        eprintln!("  safeguard tangent ratio {:.3}", n / rn);
+                    }
+                    (n, (t, c))
+                }))
+            })?
+            .0
+        } else {
+            first
+        };
+        let (n, (t, c)) = kept.expect("a first step is given: the safeguard keeps a step");
+        let mut best = (n, t, c);
         if d.settings.line_search && best.0 >= rn {
             // no step length lowered the norm, nor did the safeguards' other steps: the
             // step length where the out-of-balance force stops working along the

@@ -97,41 +97,26 @@ const STALL_ITERATIONS: usize = 20;
 const STALL_PROGRESS: f64 = 0.5;
 /// Largest turn (rad) of a deformable block within a step for which its triangles stay
 /// on the step's start geometry in the iteration matrix ([`Dynamics::effective_into`]):
-/// the rocking drums of the `column` example turn by at most 4·10⁻⁴ rad in a step of
-/// 5 ms, the voussoirs of the seed's arch by up to 10⁻² rad a step as they fall, where a
-/// matrix on the start geometry slowed the iterations (tries of 12 iterations and more:
-/// 870 against 56 under Acc. No. 1; docs/decisions/0021-start-geometry-interiors.md).
+/// rocking drums turn less, a falling voussoir more
+/// (docs/decisions/0021-start-geometry-interiors.md).
 const START_GEOMETRY_TURN: f64 = 1e-3;
 /// Factor on that spring per iteration the contact stays open.
 const OPEN_WEIGHT_DECAY: f64 = 0.1;
 /// Open/closed changes of a contact within a try of a step after which it is held open
-/// for the rest of the try's iterations: in a try of the smallest length (`max_cuts`
-/// halvings) whatever its force, in any other where it never carried more than
-/// [`HOLD_OPEN_FORCE`] of the step's force scale while closed. A contact at the kink of
-/// its law (touching with a force near zero) can make the iterations cycle whatever its
-/// spring in the matrix: closed, the step carries it open; open, the step carries it
-/// closed. Held open, the step's problem is smooth and converges; the contact ends the
-/// step with the normal gap it reached (a penetration of at most a tenth of the band,
-/// else the step is cut, `Dynamics::too_fast`), which the next step starts from with its
-/// state re-evaluated.
+/// for the rest of the try (at the smallest step length whatever its force, above it
+/// only below [`HOLD_OPEN_FORCE`]): a contact at the kink of its law makes the iterations
+/// cycle whatever its spring; held open, the step converges
+/// (docs/decisions/0022-release-redo-and-held-open-contacts.md).
 const FREEZE_FLIPS: u32 = 6;
-/// The largest force (fraction of the step's force scale, `Balance::scale`) a contact
-/// may have carried closed within a try for [`FREEZE_FLIPS`] to hold it open at a step
-/// length above the smallest. Held open only at the smallest length, such contacts
-/// stalled try after try; held open at any length whatever their force, a box landing on
-/// its base was launched (the held contact's penetration returned as elastic energy): a
-/// contact that carries a force that matters is never held open above the smallest
-/// length (docs/decisions/0022-release-redo-and-held-open-contacts.md).
+/// The largest force (fraction of the step's force scale) a contact may have carried
+/// closed within a try for [`FREEZE_FLIPS`] to hold it open above the smallest step
+/// length: a contact whose force matters is never held open there
+/// (docs/decisions/0022-release-redo-and-held-open-contacts.md).
 const HOLD_OPEN_FORCE: f64 = 1e-3;
-/// The least force (fraction of the step's force scale at its start, as
-/// [`HOLD_OPEN_FORCE`]) a contact closed at a step's start must carry there for its
-/// dashpots, and its share of Rayleigh's a₁ K ([`Dynamics::rayleigh_local`]), to act over
-/// the step. A contact that touches with no force (the head joints
-/// of a running-bond wall under gravity) sits at the kink of its law: with its dashpots
-/// engaged while the trial is closed, the force jumps by cₙ δ̇ₙ and cₛ δ̇ₛ each time the
-/// iterations carry it across δₙ = 0, a law with no solution there that the iterations
-/// cycle around, whatever the step (docs/decisions/0023-dashpots-and-rayleigh.md). Such a contact damps nothing that matters; it takes its dashpots
-/// back at the first step it starts carrying a force.
+/// The least force (fraction of the step's force scale at its start) a contact closed at
+/// a step's start must carry for its dashpots and its share of Rayleigh's a₁ K to act over
+/// the step: a contact touching with no force sits at the kink of its law, where damping
+/// makes the iterations cycle (docs/decisions/0023-dashpots-and-rayleigh.md).
 const DASHPOT_FORCE: f64 = 1e-3;
 /// Penetration (fraction of the band thickness) a contact held open may end a step with
 /// before the step is cut, and the most a new contact starts with.

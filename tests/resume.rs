@@ -362,3 +362,51 @@ fn resume_without_a_checkpoint_or_of_another_scene_is_a_clear_error() {
     let o = resume(&out);
     assert_clear_error(&o, &["checkpoint.bin", "not a dfem checkpoint"]);
 }
+
+/// A scene given by a relative path, with its record beside it by a relative name,
+/// resumes from the same directory (the checkpoint stores the scene's absolute path;
+/// the record's path, as read, differs but its samples do not).
+#[test]
+fn a_scene_given_by_a_relative_path_resumes() {
+    let dir = common::tmp_dir("resume_relative");
+    std::fs::copy(
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/elcentro1940_NS_g_dt0.02.csv"
+        ),
+        dir.join("record.csv"),
+    )
+    .unwrap();
+    let text = scene_text(1.0).replace(
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/elcentro1940_NS_g_dt0.02.csv"
+        ),
+        "record.csv",
+    );
+    assert!(text.contains("file = \"record.csv\""));
+    std::fs::write(dir.join("scene.toml"), text).unwrap();
+    let run = |args: &[&str], stop: Option<usize>| {
+        let mut c = Command::new(common::dfem_bin());
+        c.current_dir(&dir)
+            .args(args)
+            .arg("--no-plots")
+            .arg("--quiet");
+        if let Some(k) = stop {
+            c.env("DFEM_STOP_AFTER_STEP", k.to_string());
+        }
+        c.output().unwrap()
+    };
+    let o = run(&["run", "scene.toml", "--out", "out"], Some(120));
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = run(&["run", "--resume", "out"], None);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&dir.join("out"));
+    assert_eq!(s["status"], "completed");
+    assert!((s["time"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{s}");
+}

@@ -18,10 +18,10 @@
 //! * the contact-state bookkeeping between iterations (the last iteration's states and
 //!   forces, the closed ↔ open changes of bonded contacts).
 //!
-//! The correction itself (secant, tangent or blended matrix, and its safeguards) is the
-//! problem's [`Problem::correct`]; the linear algebra of a correction is the shared
-//! [`super::correction::CorrectionSolver`]'s, and every problem backtracks along its
-//! correction with the one line search of [`backtrack`].
+//! The correction itself (which matrix: secant, tangent or blended) is the problem's
+//! [`Problem::correct`]; every problem solves it with the shared correction solver
+//! (`correction::CorrectionSolver`, src/analysis/correction.rs), backtracks along it with
+//! the one line search of [`backtrack`], and safeguards it with [`safeguard`].
 
 use super::Stats;
 use crate::material::{ContactState, History};

@@ -143,10 +143,10 @@ def section_capacity(args):
 
 
 LAYER_SCENES = [
-    ("P2 rigid", "benches/scenes/p2_wall40_rigid.toml", {}),
-    ("P2 deformable", "benches/scenes/p2_wall40_deformable.toml", {}),
-    ("40 × 14 wall, rigid, capacity", "benches/scenes/capacity_wall40x14.toml", {}),
-    ("tunnel earthquake (3 s)", "examples/tunnel_earthquake/earthquake.toml", {}),
+    ("P2 rigid", "benches/scenes/p2_wall40_rigid.toml"),
+    ("P2 deformable", "benches/scenes/p2_wall40_deformable.toml"),
+    ("40 × 14 wall, rigid, capacity", "benches/scenes/capacity_wall40x14.toml"),
+    ("tunnel earthquake (3 s)", "examples/tunnel_earthquake/earthquake.toml"),
 ]
 
 
@@ -158,7 +158,7 @@ def section_layer(args):
         sys.exit("layer: give the binary to compare with, --old PATH")
     rows = []
     loads = [load()]
-    for name, scene, _ in LAYER_SCENES:
+    for name, scene in LAYER_SCENES:
         path = os.path.join(ROOT, scene)
         old, new, ratio = [], [], []
         same = True

@@ -14,7 +14,7 @@ date. Without `--write` the tables are printed. Wall times are dfem's own `wall_
 factorizations) do not depend on the load, wall times do: run it on a quiet machine
 (`uptime` near 0) and nothing else beside it.
 
-    python3 benches/performance.py capacity --write
+    python3 benches/performance.py capacity --walls 30,60 --write
     python3 benches/performance.py layer --old /path/to/old/dfem --rounds 5 --write
 
 Sections:
@@ -112,34 +112,44 @@ def table(arguments, loads, columns, align, rows):
 def section_capacity(args):
     """λ, the counts and the time of a capacity search on the 40 × 14 wall, rigid and
     deformable, against the same wall's gravity-only analysis, each the median of
-    `rounds` runs alternated."""
+    `rounds` runs alternated; then the same for the square walls of `--walls` (n courses
+    of n bricks of the same size), one run each."""
     rows = []
     loads = [load()]
-    for kind in ("rigid", "deformable"):
-        cap = variant(WALL, {("generate", "kind"): f'"{kind}"'})
-        grav = variant(WALL, {("generate", "kind"): f'"{kind}"', ("analysis", "type"): '"static"'})
-        tc, tg, s = [], [], None
-        for _ in range(args.rounds):
-            s = run(args.dfem, cap)
-            tc.append(s["stats"]["wall_time_s"])
-            g = run(args.dfem, grav)
-            tg.append(g["stats"]["wall_time_s"])
-            loads.append(load())
-        st = s["stats"]
-        c, g = statistics.median(tc), statistics.median(tg)
-        lam = s["load_factor"]
-        rows.append(
-            f"| {kind} | {s['status']} | {lam:.4f} | {st['increments']} | {st['iterations']:,} "
-            f"| {st['factorizations']:,} ({st.get('tangent_factorizations', 0):,} tangent LU) "
-            f"| {c:.2f} s | {g:.3f} s | {c / g:,.0f}× |"
-            if lam is not None
-            else f"| {kind} | {s['status']} | – | {st['increments']} | {st['iterations']:,} "
-            f"| {st['factorizations']:,} | {c:.2f} s | {g:.3f} s | {c / g:,.0f}× |"
-        )
-        os.unlink(cap)
-        os.unlink(grav)
-    columns = "blocks | status | λ | increments | iterations | numeric factorizations | capacity run | gravity-only run | ratio"
-    return table(f"capacity --rounds {args.rounds}", loads, columns, "---|---|" + "---:|" * 7, rows)
+    walls = [("40 × 14", {}, args.rounds)]
+    for n in (int(v) for v in args.walls.split(",") if v):
+        walls.append((f"{n} × {n}", {("generate", "courses"): n, ("generate", "bricks_per_course"): n}, 1))
+    for name, size, rounds in walls:
+        for kind in ("rigid", "deformable"):
+            cap = variant(WALL, {("generate", "kind"): f'"{kind}"', **size})
+            grav = variant(WALL, {("generate", "kind"): f'"{kind}"', ("analysis", "type"): '"static"', **size})
+            tc, tg, s = [], [], None
+            for _ in range(rounds):
+                s = run(args.dfem, cap)
+                tc.append(s["stats"]["wall_time_s"])
+                g = run(args.dfem, grav)
+                tg.append(g["stats"]["wall_time_s"])
+                loads.append(load())
+            st = s["stats"]
+            c, g = statistics.median(tc), statistics.median(tg)
+            lam = s["load_factor"]
+            rows.append(
+                f"| {name}, {kind} | {st['dofs']:,} | {s['status']} | "
+                + (f"{lam:.4f}" if lam is not None else "–")
+                + f" | {st['increments']} | {st['iterations']:,} "
+                f"| {st['factorizations']:,} ({st.get('tangent_factorizations', 0):,} tangent LU) "
+                f"| {c:.2f} s | {g:.3f} s | {c / g:,.0f}× |"
+            )
+            os.unlink(cap)
+            os.unlink(grav)
+    columns = (
+        "wall, blocks | unknowns | status | λ | increments | iterations | numeric factorizations "
+        "| capacity run | gravity-only run | ratio"
+    )
+    walls_arg = f" --walls {args.walls}" if args.walls else ""
+    return table(
+        f"capacity --rounds {args.rounds}{walls_arg}", loads, columns, "---|---:|---|" + "---:|" * 7, rows
+    )
 
 
 LAYER_SCENES = [
@@ -274,6 +284,7 @@ def main():
     p.add_argument("--dfem", default=os.path.join(ROOT, "target", "release", "dfem"))
     p.add_argument("--old", help="the binary to compare with (section layer)")
     p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--walls", default="", help="square walls n × n for section capacity, e.g. 30,60 (one run each)")
     p.add_argument("--record", help="the Imperial Valley 1979 .AT2 record (section output)")
     p.add_argument("--python", default=sys.executable, help="a Python with openseespy (section p2)")
     p.add_argument("--write", action="store_true", help="write the tables into docs/performance.md")

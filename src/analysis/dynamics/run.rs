@@ -103,7 +103,7 @@ pub fn run(
     run_from(scene, mesh, ranks, backend, monitor, None)
 }
 
-/// [`run`], or its continuation from a checkpoint `from` of the same scene: the rows and
+/// [`run()`], or its continuation from a checkpoint `from` of the same scene: the rows and
 /// frames up to the checkpoint's step are neither computed nor sent to `monitor` again,
 /// and the outcome's history holds only the rows after it.
 pub fn run_from(

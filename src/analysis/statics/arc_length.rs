@@ -98,7 +98,7 @@ enum Constraint {
 }
 
 /// The constraints of [`Constraint`] without their values, in the order of the counts
-/// of [`run`].
+/// of [`run()`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Kind {
     Cylinder = 0,
@@ -666,7 +666,7 @@ impl Driver<'_> {
     }
 }
 
-/// How [`run`] ended: the fraction of the path's end reached, why it stopped short (if it
+/// How [`run()`] ended: the fraction of the path's end reached, why it stopped short (if it
 /// did), the converged increments on the cylinder, the dissipation and under
 /// displacement control, and the increments accepted unconverged with the largest
 /// relative out-of-balance force one was left at.

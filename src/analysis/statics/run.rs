@@ -335,7 +335,7 @@ fn fail(d: &mut Driver, mesh: &Mesh, start: Instant, what: String, lf: Option<f6
     )
 }
 
-/// [`run`], reporting phases, iterations and converged increments to `progress`;
+/// [`run()`], reporting phases, iterations and converged increments to `progress`;
 /// `ranks`: this process's rows in a distributed run ([`System::distributed`]). The phases
 /// in turn: gravity and the loads, the prescribed displacements, then the push, the
 /// lateral load or the capacity search.

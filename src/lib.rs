@@ -1,6 +1,6 @@
 //! dfem: the discrete finite element method (DFEM) for masonry and blocky rock.
 //!
-//! Data flows one way (see `docs/` and the shared DESIGN.md):
+//! Data flows one way (docs/theory.md describes each stage):
 //! scene → geometry → mesh → assembly → linear backend (`dfem_kernels`) → analysis → output.
 // the `json!` of summary.json's statistics nests deeper than serde_json's default allows
 #![recursion_limit = "256"]

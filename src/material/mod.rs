@@ -2,6 +2,7 @@
 //! band (docs/theory.md §3) behind the [`ContactLaw`] trait.
 
 pub mod cap;
+pub mod friction_disc;
 pub mod mohr_coulomb;
 pub mod softening;
 

@@ -1,21 +1,8 @@
 //! Tests of the friction disc against the plane law and its own derivative.
 
 use super::*;
-use crate::material::ElasticBand;
-
-/// kₙ = 10¹¹ N/m, kₛ = 10¹⁰ N/m on 1 m², tan φ = 0.5.
-fn law() -> MohrCoulomb {
-    MohrCoulomb {
-        elastic: ElasticBand {
-            normal_modulus: 1e9,
-            shear_modulus: 1e8,
-            band: 0.01,
-        },
-        tan_phi: 0.5,
-        cohesion: 0.0,
-        tensile_strength: 0.0,
-    }
-}
+// the plane law of its tests: kₙ = 10¹¹ N/m, kₛ = 10¹⁰ N/m on 1 m², tan φ = 0.5
+use crate::material::mohr_coulomb::tests::law;
 
 #[test]
 fn on_a_tangent_axis_the_disc_is_the_plane_law() {

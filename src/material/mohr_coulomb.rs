@@ -118,10 +118,10 @@ impl<A, B, C> MapTwo<A, B> for (A, B, C) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn law() -> MohrCoulomb {
+    pub(crate) fn law() -> MohrCoulomb {
         MohrCoulomb {
             elastic: ElasticBand {
                 normal_modulus: 1e9,

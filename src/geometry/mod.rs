@@ -5,6 +5,7 @@ pub mod face_contact;
 pub mod joints;
 pub mod polygon;
 pub mod polyhedron;
+pub mod rotation;
 
 pub use joints::{find_joints, overlapping_pairs, JointSegment};
 pub use polygon::Point;

@@ -15,6 +15,7 @@
 
 pub mod loads;
 pub mod mass;
+pub mod rigid3d;
 mod rows;
 
 pub use rows::Ranks;

@@ -117,6 +117,49 @@ pub fn block_face_contacts(
     out
 }
 
+/// A face-to-face contact between two blocks of a model: the blocks' indices (a < b),
+/// their faces' and the contact.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlockContact {
+    pub blocks: (usize, usize),
+    pub faces: (usize, usize),
+    pub contact: FaceContact,
+}
+
+/// Every face-to-face contact of a set of blocks: the broad phase sweeps the blocks'
+/// bounding boxes, grown by `gap` (m), along x (sorted by their lowest x, each compared
+/// with the boxes that start before it ends) and keeps the pairs whose boxes overlap in
+/// y and z too; the narrow phase is [`block_face_contacts`]. Sorted by block pair, then
+/// faces: the same list whatever the input's memory layout.
+pub fn find_face_contacts(blocks: &[Polyhedron], gap: f64, angle: f64) -> Vec<BlockContact> {
+    let boxes: Vec<(Vec3, Vec3)> = blocks.iter().map(|b| b.bounding_box()).collect();
+    let mut order: Vec<usize> = (0..blocks.len()).collect();
+    order.sort_by(|&i, &j| boxes[i].0[0].total_cmp(&boxes[j].0[0]).then(i.cmp(&j)));
+    let mut out = Vec::new();
+    for (n, &i) in order.iter().enumerate() {
+        let (lo, hi) = boxes[i];
+        for &j in &order[n + 1..] {
+            let (lo2, hi2) = boxes[j];
+            if lo2[0] > hi[0] + gap {
+                break;
+            }
+            if (1..3).any(|k| lo2[k] > hi[k] + gap || lo[k] > hi2[k] + gap) {
+                continue;
+            }
+            let (a, b) = (i.min(j), i.max(j));
+            for (fa, fb, contact) in block_face_contacts(&blocks[a], &blocks[b], gap, angle) {
+                out.push(BlockContact {
+                    blocks: (a, b),
+                    faces: (fa, fb),
+                    contact,
+                });
+            }
+        }
+    }
+    out.sort_by(|x, y| x.blocks.cmp(&y.blocks).then(x.faces.cmp(&y.faces)));
+    out
+}
+
 fn cross2(o: [f64; 2], p: [f64; 2], q: [f64; 2]) -> f64 {
     (p[0] - o[0]) * (q[1] - o[1]) - (p[1] - o[1]) * (q[0] - o[0])
 }

@@ -1,7 +1,8 @@
 //! Tests of the convex polyhedra and their face contacts against closed forms.
 
 use super::face_contact::{
-    block_face_contacts, clip_convex, face_contact, polygon_area, tangent_frame,
+    block_face_contacts, clip_convex, face_contact, find_face_contacts, polygon_area,
+    tangent_frame, BlockContact,
 };
 use super::polyhedron::{cross3, dot3, norm3, Polyhedron, PolyhedronDefect, Vec3};
 
@@ -271,4 +272,62 @@ fn clipping_keeps_a_polygon_inside_and_drops_one_outside() {
     let cut = clip_convex(&half, &square);
     assert_eq!(cut.len(), 4, "{cut:?}");
     assert!(close(polygon_area(&cut), 0.25, 1e-14), "{cut:?}");
+}
+
+#[test]
+fn a_stack_of_boxes_touches_at_every_shared_face() {
+    // 4 × 3 × 2 unit boxes: (n−1)ml + n(m−1)l + nm(l−1) = 18 + 16 + 12 = 46 shared faces
+    // of 1 m² each, however the blocks are listed
+    let (n, m, l) = (4, 3, 2);
+    let mut blocks = Vec::new();
+    for k in 0..l {
+        for j in 0..m {
+            for i in 0..n {
+                let lo = [i as f64, j as f64, k as f64];
+                blocks.push(Polyhedron::from_box(
+                    lo,
+                    [lo[0] + 1.0, lo[1] + 1.0, lo[2] + 1.0],
+                ));
+            }
+        }
+    }
+    let contacts = find_face_contacts(&blocks, 1e-6, 1e-6);
+    assert_eq!(contacts.len(), 46);
+    assert!(contacts.iter().all(|c| close(c.contact.area(), 1.0, 1e-12)));
+    assert!(contacts.iter().all(|c| c.blocks.0 < c.blocks.1));
+    // listed the other way round: the same pairs of blocks
+    let reversed: Vec<Polyhedron> = blocks.iter().rev().cloned().collect();
+    let mut pairs: Vec<(usize, usize)> = find_face_contacts(&reversed, 1e-6, 1e-6)
+        .iter()
+        .map(|c| {
+            let last = blocks.len() - 1;
+            let (a, b) = (last - c.blocks.0, last - c.blocks.1);
+            (a.min(b), a.max(b))
+        })
+        .collect();
+    pairs.sort();
+    let expected: Vec<(usize, usize)> = contacts.iter().map(|c| c.blocks).collect();
+    assert_eq!(pairs, expected);
+    // a running-bond course on top, shifted by half a box: each top box on two below
+    let top: Vec<Polyhedron> = (0..n - 1)
+        .map(|i| {
+            let x = i as f64 + 0.5;
+            Polyhedron::from_box([x, 0.0, 2.0], [x + 1.0, 1.0, 3.0])
+        })
+        .collect();
+    let mut all = blocks.clone();
+    all.extend(top);
+    let found = find_face_contacts(&all, 1e-6, 1e-6);
+    let on_top: Vec<&BlockContact> = found
+        .iter()
+        .filter(|c| c.blocks.1 >= blocks.len())
+        .collect();
+    // 3 top boxes each on 2 boxes below (half their area each), and 2 between themselves
+    let below = on_top.iter().filter(|c| c.blocks.0 < blocks.len()).count();
+    assert_eq!(below, 6);
+    assert!(on_top
+        .iter()
+        .filter(|c| c.blocks.0 < blocks.len())
+        .all(|c| close(c.contact.area(), 0.5, 1e-12)));
+    assert_eq!(on_top.len() - below, 2);
 }

@@ -231,3 +231,34 @@ fn step_study_table() {
         }
     }
 }
+
+/// The integrator table on rocking (docs/decisions/0036-stick-slip-events.md): the
+/// slender block of tests/validation_dynamics.rs landing back on its heel, the ratio of
+/// its angular velocities after and before the impact against Housner's (1963)
+/// 1 − (3/2) sin²α, at 2, 1 and 0.5 ms, per integrator, with the run time.
+#[test]
+#[ignore]
+fn rocking_integrator_table() {
+    for integ in [
+        "integrator = \"hht\"",
+        "integrator = \"newmark\"",
+        "integrator = \"generalized-alpha\"",
+        "integrator = \"generalized-alpha\"\nrho_inf = 0.0",
+    ] {
+        for dt in [0.002, 0.001, 0.0005] {
+            let start = Instant::now();
+            let h = common::dynamic_history(&common::rocking_block(dt, integ));
+            let time = start.elapsed().as_secs_f64();
+            let r = common::rocking_impact(&h);
+            eprintln!(
+                "  {:>44} dt {dt}: tilt {:.4} rad, lands {}, ratio {:.4} vs {:.4}: {:+.2} %, {time:.2} s",
+                integ.replace('\n', " "),
+                r.p0,
+                r.landed,
+                r.ratio,
+                r.housner,
+                100.0 * (r.ratio / r.housner - 1.0)
+            );
+        }
+    }
+}

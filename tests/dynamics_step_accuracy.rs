@@ -105,12 +105,17 @@ impl Record {
 /// before the event cuts, was off by 16 % to 24 % on El Centro); and the slip at dt/2
 /// differs from it by less than the error estimate of the run at dt.
 fn check(rec: &Record, mu: f64) {
+    check_at(rec, mu, rec.dt);
+}
+
+/// [`check`] at the step `dt` (s).
+fn check_at(rec: &Record, mu: f64, dt: f64) {
     let reference = rec.reference(mu, 1e-4);
-    let (u, estimate, _) = rec.dfem(mu, rec.dt, "");
-    let (u2, _, _) = rec.dfem(mu, rec.dt / 2.0, "");
+    let (u, estimate, _) = rec.dfem(mu, dt, "");
+    let (u2, _, _) = rec.dfem(mu, dt / 2.0, "");
     let err = common::rel_err(u, reference);
     eprintln!(
-        "{} μ = {mu}: {:.4} mm vs {:.4} mm, {:+.2} %; dt/2 moves it by {:.2e} m, estimate {estimate:.2e} m",
+        "{} μ = {mu}, dt = {dt}: {:.4} mm vs {:.4} mm, {:+.2} %; dt/2 moves it by {:.2e} m, estimate {estimate:.2e} m",
         rec.format,
         1e3 * u,
         1e3 * reference,
@@ -148,28 +153,54 @@ fn imperial_valley_slip_at_the_record_step() {
 #[test]
 #[ignore]
 fn other_friction_coefficients_at_the_record_step() {
-    for mu in [0.05, 0.15, 0.3] {
+    for mu in [0.05, 0.15] {
         check(&el_centro(), mu);
     }
     if let Some(rec) = at2_record() {
-        check(&rec, 0.1);
+        for mu in [0.08, 0.1] {
+            check(&rec, mu);
+        }
     }
+}
+
+/// El Centro with μ = 0.3, just under its peak of 0.319 g: the block slips 16 μm in
+/// 22 ms, about one step of the record, which the record's step does not resolve (−18 %
+/// at 0.02 s and 0.01 s, with each integrator −13 % to −18 %:
+/// docs/decisions/0036-stick-slip-events.md); within 3 % from a quarter of it, 5 ms.
+#[test]
+#[ignore]
+fn el_centro_slip_of_one_record_step_mu_0_3() {
+    let rec = el_centro();
+    check_at(&rec, 0.3, rec.dt / 4.0);
 }
 
 /// The table of docs/decisions/0036-stick-slip-events.md: error and run time against
 /// the step, per integrator (`DFEM_STUDY_INTEGRATORS`, comma-separated; extra
-/// `[analysis]` keys in `DFEM_STUDY_EXTRA`; `DFEM_STUDY_AT2_ONLY` for the `.AT2` row).
+/// `[analysis]` keys in `DFEM_STUDY_EXTRA`; the friction coefficients of the rows, comma-
+/// separated, in `DFEM_STUDY_EL_CENTRO_MUS` (default 0.1,0.2) and `DFEM_STUDY_AT2_MUS`
+/// (the `.AT2` record's, default 0.05); the divisors of the record's step in
+/// `DFEM_STUDY_DIVS`, default 1,2,4).
 #[test]
 #[ignore]
 fn step_study_table() {
-    let mut rows = if std::env::var("DFEM_STUDY_AT2_ONLY").is_ok() {
-        vec![]
-    } else {
-        vec![(el_centro(), 0.1), (el_centro(), 0.2)]
+    let list = |key: &str, default: &str| -> Vec<f64> {
+        std::env::var(key)
+            .unwrap_or(default.into())
+            .split(',')
+            .filter(|m| !m.is_empty())
+            .map(|m| m.parse().unwrap())
+            .collect()
     };
-    if let Some(r) = at2_record() {
-        rows.push((r, 0.05));
+    let mut rows: Vec<(Record, f64)> = list("DFEM_STUDY_EL_CENTRO_MUS", "0.1,0.2")
+        .into_iter()
+        .map(|mu| (el_centro(), mu))
+        .collect();
+    for mu in list("DFEM_STUDY_AT2_MUS", "0.05") {
+        if let Some(r) = at2_record() {
+            rows.push((r, mu));
+        }
     }
+    let divs = list("DFEM_STUDY_DIVS", "1,2,4");
     let integrators: Vec<String> = std::env::var("DFEM_STUDY_INTEGRATORS")
         .unwrap_or("hht,newmark,generalized-alpha".into())
         .split(',')
@@ -186,7 +217,7 @@ fn step_study_table() {
             1e3 * r2
         );
         for integ in &integrators {
-            for div in [1.0, 2.0, 4.0] {
+            for &div in &divs {
                 let dt = rec.dt / div;
                 let (u, estimate, time) =
                     rec.dfem(*mu, dt, &format!("integrator = \"{integ}\"\n{extra}"));
@@ -197,6 +228,37 @@ fn step_study_table() {
                     1e3 * estimate
                 );
             }
+        }
+    }
+}
+
+/// The integrator table on rocking (docs/decisions/0036-stick-slip-events.md): the
+/// slender block of tests/validation_dynamics.rs landing back on its heel, the ratio of
+/// its angular velocities after and before the impact against Housner's (1963)
+/// 1 − (3/2) sin²α, at 2, 1 and 0.5 ms, per integrator, with the run time.
+#[test]
+#[ignore]
+fn rocking_integrator_table() {
+    for integ in [
+        "integrator = \"hht\"",
+        "integrator = \"newmark\"",
+        "integrator = \"generalized-alpha\"",
+        "integrator = \"generalized-alpha\"\nrho_inf = 0.0",
+    ] {
+        for dt in [0.002, 0.001, 0.0005] {
+            let start = Instant::now();
+            let h = common::dynamic_history(&common::rocking_block(dt, integ));
+            let time = start.elapsed().as_secs_f64();
+            let r = common::rocking_impact(&h);
+            eprintln!(
+                "  {:>44} dt {dt}: tilt {:.4} rad, lands {}, ratio {:.4} vs {:.4}: {:+.2} %, {time:.2} s",
+                integ.replace('\n', " "),
+                r.p0,
+                r.landed,
+                r.ratio,
+                r.housner,
+                100.0 * (r.ratio / r.housner - 1.0)
+            );
         }
     }
 }

@@ -1,5 +1,5 @@
 //! Accuracy of the dynamic driver at a ground-motion record's own sampling step
-//! (docs/theory.md §5, "Stick–slip events and impacts"; docs/validation.md).
+//! (docs/theory.md §5, "Stick–slip events"; docs/validation.md).
 //!
 //! A rigid 1 m × 0.5 m block on a fixed base (`common::box_on_base`) shaken by El Centro
 //! 1940 N-S (0.02 s), with the default settings and `dt` = the record's step: its largest

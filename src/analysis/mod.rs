@@ -129,7 +129,7 @@ pub struct Stats {
     /// `adaptive_tolerance`.
     pub error_cuts: usize,
     /// Converged time steps cut to locate a stick–slip event of a contact within them
-    /// (`event_cuts`, docs/theory.md §5, "Stick–slip events and impacts").
+    /// (`event_cuts`, docs/theory.md §5, "Stick–slip events").
     pub event_cuts: usize,
     /// The local error estimate of the time steps (m; `Dynamics::step_error`, the
     /// largest node displacement of h² (β − 1/6)(a₁ − a₀)): its largest value over the

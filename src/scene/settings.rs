@@ -278,8 +278,8 @@ pub struct DynamicSettings {
     /// `dt` cut only when they do not converge or jump over an impact.
     pub adaptive: Option<f64>,
     /// Halvings of a time step allowed to locate a change of a closed contact between
-    /// sticking and slipping, a reversal of its slip, or an impact (`event_cuts`;
-    /// `Dynamics::slip_event`, docs/theory.md §5, "Stick–slip events and impacts"); 0: none.
+    /// sticking and slipping, or a reversal of its slip (`event_cuts`;
+    /// `Dynamics::slip_event`, docs/theory.md §5, "Stick–slip events"); 0: none.
     pub event_cuts: usize,
     /// `[analysis] frame = "absolute"`: the fixed blocks move with the ground (the
     /// prescribed motion of the foundation) instead of the ground-motion load on the free

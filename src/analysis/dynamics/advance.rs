@@ -6,7 +6,7 @@
 use super::*;
 
 /// The least slip rate (m/s) of a stick–slip event, |Δδₛ|/h or |δ̇ₛ| at the step's end,
-/// and the least closing rate |Δδₙ|/h of an impact, for the step to be cut around it ([`Dynamics::slip_event`]); a rate, the same at every
+/// for the step to be cut around it ([`Dynamics::slip_event`]); a rate, the same at every
 /// cut, so that an event counted is placed to dt/2^event_cuts: the joints of a rock mass
 /// that stick and slip slower at nearly every step cost the tunnel earthquake 7 times the
 /// steps (docs/decisions/0036-stick-slip-events.md).
@@ -306,8 +306,7 @@ impl Dynamics<'_> {
         Ok(true)
     }
 
-    /// Whether a converged step holds a contact event: an impact (a contact open at the
-    /// step's start closes), or a stick–slip event: a contact closed at both its
+    /// Whether a converged step holds a stick–slip event: a contact closed at both its
     /// ends that sticks at one and slips at the other, or slips at both in opposite
     /// directions (its shear force Fₛ changed sign), or slips at both in the same
     /// direction but ends with its slip velocity against its friction force
@@ -316,7 +315,7 @@ impl Dynamics<'_> {
     /// friction force jumps by up to 2 μ Fₙ there, while the scheme's trapezoidal rule
     /// v₁ = v₀ + h((1−γ) a₀ + γ a₁) spreads the jump over the whole step: an error of the
     /// order of μ Fₙ h/m in the velocity per event, which cutting the step around the
-    /// event reduces (docs/theory.md §5, "Stick–slip events and impacts").
+    /// event reduces (docs/theory.md §5, "Stick–slip events").
     pub(super) fn slip_event(&self, acc: &Accepted) -> bool {
         use ContactState::{Open, Slip, Stick};
         // the velocities relative to the ground (the foundation's own in the absolute
@@ -331,11 +330,6 @@ impl Dynamics<'_> {
         };
         (0..acc.trial.state.len()).any(|k| {
             let (s0, s1) = (self.committed.state[k], acc.trial.state[k]);
-            if s0 == Open && s1 != Open {
-                // an impact: the contact closes within the step and the blocks'
-                // velocities jump there (docs/decisions/0041-impacts-as-contact-events.md)
-                return acc.trial.rel[k][0].abs() / acc.h > EVENT_SLIP_RATE;
-            }
             let (f0, f1) = (self.committed.force[k][1], acc.trial.force[k][1]);
             let event = match (s0, s1) {
                 (Stick, Slip) | (Slip, Stick) => true,

@@ -125,6 +125,8 @@ fn every_file_has_a_test() {
 }
 
 cases! {
+    three_dimensional_scene,
+    dimension_not_2_or_3,
     accept_residual_without_arc_length,
     arc_length_without_push,
     push_deformable_block,

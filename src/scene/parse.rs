@@ -60,6 +60,9 @@ struct RawInSitu {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawModel {
+    /// Read by [`check_dimension`] before the rest.
+    #[serde(rename = "dimension")]
+    _dimension: Option<toml::Value>,
     plane: Option<String>,
     thickness: Option<f64>,
     gravity: Option<[f64; 2]>,
@@ -378,8 +381,47 @@ fn warning(file: Option<&Path>, line: usize, what: std::fmt::Arguments) -> Strin
     )
 }
 
+/// `[model] dimension`, read before the rest of the scene, whose keys it changes: 2 (the
+/// default) is read on; 3 is refused with its line, since this version analyses
+/// two-dimensional scenes only (the blocks of a 3D scene would otherwise fail as 2D
+/// blocks, with a message that does not say why).
+fn check_dimension(src: &Src) -> Result<()> {
+    #[derive(Deserialize)]
+    struct Probe {
+        model: Option<Spanned<ModelProbe>>,
+    }
+    #[derive(Deserialize)]
+    struct ModelProbe {
+        dimension: Option<toml::Value>,
+    }
+    // a scene that is not TOML is reported by the full parse
+    let Ok(probe) = toml::from_str::<Probe>(src.text) else {
+        return Ok(());
+    };
+    let Some(model) = probe.model else {
+        return Ok(());
+    };
+    let line = src.key_line(model.span().start, "dimension");
+    match model.get_ref().dimension.as_ref().map(|v| v.as_integer()) {
+        None | Some(Some(2)) => Ok(()),
+        Some(Some(3)) => Err(err_at(
+            line,
+            "[model] key 'dimension'",
+            "three-dimensional scenes (dimension = 3) are not analysed by this version: it reads two-dimensional scenes",
+            "give the model in two dimensions (docs/scene-reference.md), without the key 'dimension'",
+        )),
+        Some(_) => Err(err_at(
+            line,
+            "[model] key 'dimension'",
+            "dimension must be the integer 2 or 3",
+            "leave it out for a two-dimensional scene (dimension = 2)",
+        )),
+    }
+}
+
 fn parse_inner(text: &str, file: Option<&Path>) -> Result<Scene> {
     let src = Src { text };
+    check_dimension(&src)?;
     let raw: RawScene = toml::from_str(text).map_err(|e| {
         let line = e.span().map(|s| src.line(s.start));
         let msg = e.message().trim().to_string();

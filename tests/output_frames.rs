@@ -16,16 +16,7 @@ const STEPS: usize = 167;
 /// A rigid box sliding on a base (tan φ = 0.2) under a sine ground motion of 0.3 g, with
 /// `output` (the `[output]` table).
 fn scene_text(output: &str) -> String {
-    common::box_on_base_with(
-        0.2,
-        output,
-        r#"[analysis]
-type = "dynamic"
-dt = 0.003
-duration = 0.5
-ground_motion = { expression = "0.3*sin(10*t)", units = "g" }
-"#,
-    )
+    common::sliding_box(output)
 }
 
 fn dfem(

@@ -148,8 +148,9 @@ pub trait Monitor {
     fn wants_frames(&self) -> bool {
         false
     }
-    /// The full state at a frame (at the steps of [`FrameSchedule`]).
-    fn frame(&mut self, _step: usize, _time: f64, _state: &Outcome) -> Result<()> {
+    /// The full state at a frame (at the steps of [`FrameSchedule`]), the monitor's to
+    /// keep (the output writer hands it to its thread).
+    fn frame(&mut self, _step: usize, _time: f64, _state: Outcome) -> Result<()> {
         Ok(())
     }
     /// Whether the run should stop after step `step` (Ctrl-C): the driver then writes a

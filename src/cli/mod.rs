@@ -402,10 +402,13 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                     }
                     eprintln!("\ninterrupted: stopping after this time step (Ctrl-C again to stop at once; the results up to the last checkpoint are kept)");
                 });
-                match saved {
+                // the files written on a thread of their own beside the run
+                // (docs/decisions/0042-output-writer-thread.md)
+                std::thread::scope(|scope| match saved {
                     Some(s) => {
                         let mut w = output::StreamWriter::resuming(&out, &sc, &m, &s.state)?
-                            .stop_on(stop);
+                            .stop_on(stop)
+                            .on_thread(scope)?;
                         analysis::resume_with(&sc, &m, ranks, backend.as_mut(), &mut w, s.state)
                             .and_then(|mut o| {
                                 w.complete(&mut o);
@@ -414,14 +417,16 @@ fn dispatch(cli: Cli, code: &mut u8) -> Result<()> {
                             })
                     }
                     None => {
-                        let mut w = output::StreamWriter::new(&out, &sc, &m)?.stop_on(stop);
+                        let mut w = output::StreamWriter::new(&out, &sc, &m)?
+                            .stop_on(stop)
+                            .on_thread(scope)?;
                         analysis::run_with(&sc, &m, ranks, backend.as_mut(), &mut prog, &mut w)
                             .and_then(|o| {
                                 w.finish()?;
                                 Ok(o)
                             })
                     }
-                }
+                })
             } else {
                 analysis::run_with(
                     &sc,

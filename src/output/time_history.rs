@@ -66,6 +66,66 @@ pub fn history(path: &Path, title: &str, h: &History, format: Format) -> Result<
 
 /// The range [lo, hi] of the finite values of column `c` over the series, padded by 5 %
 /// (and widened to ±1 µm when it is flat).
+/// Time intervals of a history figure drawn by their extremes (900 px wide: about two
+/// a pixel; docs/decisions/0042-output-writer-thread.md).
+const DRAWN_INTERVALS: usize = 2000;
+
+/// The points (t, column `c`) of the line drawn (finite values only): every row, or for
+/// more than 4 × [`DRAWN_INTERVALS`] rows, in each of that many equal intervals of
+/// [t0, t1] the first, lowest, highest and last point, in time order: the line then
+/// reaches the same extremes in every pixel column as through every row.
+fn drawn(h: &History, t: usize, c: usize, t0: f64, t1: f64) -> Vec<(f64, f64)> {
+    let points = h
+        .rows
+        .iter()
+        .filter(|r| r[t].is_finite() && r[c].is_finite())
+        .map(|r| (r[t], r[c]));
+    if h.rows.len() <= 4 * DRAWN_INTERVALS {
+        return points.collect();
+    }
+    let n = DRAWN_INTERVALS;
+    let slot = |x: f64| (((x - t0) / (t1 - t0) * n as f64) as usize).min(n - 1);
+    let mut out = Vec::with_capacity(4 * n);
+    // the current interval and its first, lowest, highest and last points (row, point)
+    type Kept = [(usize, (f64, f64)); 4];
+    let mut cur: Option<(usize, Kept)> = None;
+    let flush = |out: &mut Vec<(f64, f64)>, k: &Kept| {
+        let mut k = *k;
+        k.sort_by_key(|p| p.0);
+        let mut last = usize::MAX;
+        for (i, p) in k {
+            if i != last {
+                out.push(p);
+                last = i;
+            }
+        }
+    };
+    for (i, p) in points.enumerate() {
+        let s = slot(p.0);
+        match &mut cur {
+            Some((cs, k)) if *cs == s => {
+                if p.1 < k[1].1 .1 {
+                    k[1] = (i, p);
+                }
+                if p.1 > k[2].1 .1 {
+                    k[2] = (i, p);
+                }
+                k[3] = (i, p);
+            }
+            _ => {
+                if let Some((_, k)) = &cur {
+                    flush(&mut out, k);
+                }
+                cur = Some((s, [(i, p); 4]));
+            }
+        }
+    }
+    if let Some((_, k)) = &cur {
+        flush(&mut out, k);
+    }
+    out
+}
+
 fn range(h: &History, cols: impl Iterator<Item = usize> + Clone) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for r in &h.rows {
@@ -131,10 +191,7 @@ fn draw<DB: DrawingBackend>(
             let c = Palette99::pick(k).to_rgba();
             let line = chart
                 .draw_series(LineSeries::new(
-                    h.rows
-                        .iter()
-                        .filter(|r| r[t].is_finite() && r[col(x)].is_finite())
-                        .map(|r| (r[t], r[col(x)])),
+                    drawn(h, t, col(x), t0, t1),
                     c.stroke_width(2),
                 ))
                 .map_err(e)?;
@@ -152,6 +209,60 @@ fn draw<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A long history is drawn through the first, lowest, highest and last point of each
+    /// interval (found here by a plain scan of the rows), in time order; a short one
+    /// through every point.
+    #[test]
+    fn long_histories_are_drawn_by_the_extremes_of_each_interval() {
+        let rows = 78_001;
+        let h = History {
+            columns: ["t", "a.ux"].map(String::from).to_vec(),
+            rows: (0..rows)
+                .map(|k| {
+                    let t = k as f64 * 5e-4;
+                    // a spike at one row between smooth ones
+                    let spike = if k == 40_000 { 1.0 } else { 0.0 };
+                    vec![t, (7.0 * t).sin() * 1e-3 + 1e-4 * (k % 3) as f64 + spike]
+                })
+                .collect(),
+            ..Default::default()
+        };
+        let (t0, t1) = (0.0, 39.0);
+        let d = drawn(&h, 0, 1, t0, t1);
+        assert!(d.len() <= 4 * DRAWN_INTERVALS && d.len() > 2 * DRAWN_INTERVALS);
+        assert!(d.windows(2).all(|w| w[0].0 < w[1].0), "in time order");
+        assert!(
+            d.contains(&(h.rows[40_000][0], h.rows[40_000][1])),
+            "the spike"
+        );
+        // each interval's extremes and ends, by a scan of all rows
+        let n = DRAWN_INTERVALS as f64;
+        let mut by: std::collections::BTreeMap<usize, Vec<(f64, f64)>> = Default::default();
+        for r in &h.rows {
+            let s = (((r[0] - t0) / (t1 - t0) * n) as usize).min(DRAWN_INTERVALS - 1);
+            by.entry(s).or_default().push((r[0], r[1]));
+        }
+        for pts in by.values() {
+            let lo = pts.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+            let hi = pts.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+            for want in [pts[0], *pts.last().unwrap()] {
+                assert!(d.contains(&want));
+            }
+            let mine: Vec<f64> = d
+                .iter()
+                .filter(|p| p.0 >= pts[0].0 && p.0 <= pts.last().unwrap().0)
+                .map(|p| p.1)
+                .collect();
+            assert!(mine.contains(&lo) && mine.contains(&hi));
+        }
+        // short: every point
+        let short = History {
+            rows: h.rows[..8000].to_vec(),
+            ..h.clone()
+        };
+        assert_eq!(drawn(&short, 0, 1, t0, t1).len(), 8000);
+    }
 
     #[test]
     fn series_pair_the_columns_of_each_block() {

@@ -61,8 +61,8 @@ struct RawInSitu {
 #[serde(deny_unknown_fields)]
 struct RawModel {
     /// Read by [`check_dimension`] before the rest.
-    #[serde(rename = "dimension")]
-    _dimension: Option<toml::Value>,
+    #[allow(dead_code)]
+    dimension: Option<toml::Value>,
     plane: Option<String>,
     thickness: Option<f64>,
     gravity: Option<[f64; 2]>,

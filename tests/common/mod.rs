@@ -427,3 +427,19 @@ pub fn rocking_impact(h: &dfem::analysis::dynamics::History) -> RockingImpact {
         housner: 1.0 - 1.5 * alpha.sin().powi(2),
     }
 }
+
+/// 0.5 s at dt = 3 ms (167 steps, the last one cut to end at 0.5 s) of a rigid box sliding
+/// on a base (tan φ = 0.2) under a sine ground motion of 0.3 g, with `output` (the
+/// `[output]` table): the scene of the output tests.
+pub fn sliding_box(output: &str) -> String {
+    box_on_base_with(
+        0.2,
+        output,
+        r#"[analysis]
+type = "dynamic"
+dt = 0.003
+duration = 0.5
+ground_motion = { expression = "0.3*sin(10*t)", units = "g" }
+"#,
+    )
+}

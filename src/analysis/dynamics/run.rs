@@ -210,7 +210,7 @@ pub fn run_from(
         if frames {
             history.frames.push((0.0, 0));
             if monitor.wants_frames() {
-                monitor.frame(0, 0.0, &d.outcome(Status::Stable))?;
+                monitor.frame(0, 0.0, d.outcome(Status::Stable))?;
             }
         }
         if save(&d, monitor, 0)? {
@@ -248,7 +248,7 @@ pub fn run_from(
         if frames && schedule.due(k) {
             history.frames.push((d.time, k));
             if monitor.wants_frames() {
-                monitor.frame(k, d.time, &d.outcome(Status::Stable))?;
+                monitor.frame(k, d.time, d.outcome(Status::Stable))?;
             }
         }
         if k < steps && save(&d, monitor, k)? {

@@ -64,8 +64,6 @@ pub fn history(path: &Path, title: &str, h: &History, format: Format) -> Result<
     .map_err(err)
 }
 
-/// The range [lo, hi] of the finite values of column `c` over the series, padded by 5 %
-/// (and widened to ±1 µm when it is flat).
 /// Time intervals of a history figure drawn by their extremes (900 px wide: about two
 /// a pixel; docs/decisions/0042-output-writer-thread.md).
 const DRAWN_INTERVALS: usize = 2000;
@@ -126,6 +124,8 @@ fn drawn(h: &History, t: usize, c: usize, t0: f64, t1: f64) -> Vec<(f64, f64)> {
     out
 }
 
+/// The range [lo, hi] of the finite values of column `c` over the series, padded by 5 %
+/// (and widened to ±1 µm when it is flat).
 fn range(h: &History, cols: impl Iterator<Item = usize> + Clone) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for r in &h.rows {

@@ -165,6 +165,24 @@ impl Polyhedron {
         }
     }
 
+    /// The prism of the plane polygon `polygon` (m, counter-clockwise in (x, z): x to the
+    /// right, z up, as a two-dimensional scene's (x, y)) between the depths y = `y0` and
+    /// y = `y1` > `y0` (m): a two-dimensional block made solid, with its front face
+    /// (y = y0), its back face and one face per edge.
+    pub fn prism(polygon: &[[f64; 2]], y0: f64, y1: f64) -> Polyhedron {
+        let n = polygon.len();
+        let mut vertices: Vec<Vec3> = polygon.iter().map(|p| [p[0], y0, p[1]]).collect();
+        vertices.extend(polygon.iter().map(|p| [p[0], y1, p[1]]));
+        // seen from −y, x is to the right and z up: the front face keeps the polygon's
+        // order, the back face (seen from +y) reverses it
+        let mut faces = vec![(0..n).collect::<Vec<_>>(), (n..2 * n).rev().collect()];
+        for i in 0..n {
+            let j = (i + 1) % n;
+            faces.push(vec![j, i, i + n, j + n]);
+        }
+        Polyhedron { vertices, faces }
+    }
+
     /// The face's vertices (m).
     pub fn face_points(&self, face: usize) -> Vec<Vec3> {
         self.faces[face].iter().map(|&i| self.vertices[i]).collect()

@@ -11,6 +11,7 @@ pub mod arch;
 pub(crate) mod common;
 pub mod incline;
 pub mod slope;
+pub mod solid;
 #[cfg(test)]
 pub(crate) mod testutil;
 pub mod tower;

@@ -19,7 +19,7 @@ fn coefficients(theta: f64) -> (f64, f64) {
     }
 }
 
-/// Rodrigues' formula: R(θ) = I + a [θ]ₓ + b [θ]ₓ², a = sin θ/θ, b = (1 − cos θ)/θ²,
+/// Rodrigues' formula: R(θ) = I + a \[θ\]ₓ + b \[θ\]ₓ², a = sin θ/θ, b = (1 − cos θ)/θ²,
 /// θ = |θ| (R1).
 pub fn rotation_matrix(theta: Vec3) -> Mat3 {
     let (a, b) = coefficients(dot3(theta, theta).sqrt());

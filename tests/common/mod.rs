@@ -87,20 +87,32 @@ slope_length = 12.0
 /// Blocks "base" (fixed, 3 m × 0.5 m, top at y = 0) and "box" (1 m × 1 m rock, `kind`,
 /// its bottom `h0` (m) above the base).
 pub fn box_above_base(kind: &str, h0: f64) -> String {
+    let h1 = h0 + 1.0;
+    on_fixed_base(
+        [[-1.0, -0.5], [2.0, -0.5], [2.0, 0.0], [-1.0, 0.0]],
+        "box",
+        kind,
+        [[0.0, h0], [1.0, h0], [1.0, h1], [0.0, h1]],
+    )
+}
+
+/// The `[[block]]` tables of a fixed block "base" with the vertices `base` (m) and a rock
+/// block `name` of `kind` with the vertices `block` (m): the test scenes of one block on a
+/// foundation.
+pub fn on_fixed_base(base: [[f64; 2]; 4], name: &str, kind: &str, block: [[f64; 2]; 4]) -> String {
     format!(
         r#"
 [[block]]
 name = "base"
 material = "rock"
 support = "fixed"
-vertices = [[-1.0, -0.5], [2.0, -0.5], [2.0, 0.0], [-1.0, 0.0]]
+vertices = {base:?}
 [[block]]
-name = "box"
+name = "{name}"
 material = "rock"
 kind = "{kind}"
-vertices = [[0.0, {h0}], [1.0, {h0}], [1.0, {h1}], [0.0, {h1}]]
-"#,
-        h1 = h0 + 1.0
+vertices = {block:?}
+"#
     )
 }
 
@@ -284,20 +296,14 @@ pub fn box_on_base(mu: f64, analysis: &str) -> String {
 /// history-only output.
 pub fn box_on_base_with(mu: f64, output: &str, analysis: &str) -> String {
     format!(
-        r#"{}
-[[block]]
-name = "base"
-material = "rock"
-support = "fixed"
-vertices = [[-20.0, -1.0], [20.0, -1.0], [20.0, 0.0], [-20.0, 0.0]]
-[[block]]
-name = "box"
-material = "rock"
-kind = "rigid"
-vertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]
-{output}
-{analysis}"#,
-        rock_and_joint(mu.atan().to_degrees())
+        "{}{}{output}\n{analysis}",
+        rock_and_joint(mu.atan().to_degrees()),
+        on_fixed_base(
+            [[-20.0, -1.0], [20.0, -1.0], [20.0, 0.0], [-20.0, 0.0]],
+            "box",
+            "rigid",
+            [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]],
+        )
     )
 }
 
@@ -353,25 +359,20 @@ pub fn largest_displacement(out: &Outcome) -> f64 {
 /// lines `integrator` (tests/validation_dynamics.rs, `rocking_block_lands_back_on_its_heel`).
 pub fn rocking_block(dt: f64, integrator: &str) -> String {
     format!(
-        r#"{}
-[[block]]
-name = "base"
-material = "rock"
-support = "fixed"
-vertices = [[-1.0, -0.5], [1.5, -0.5], [1.5, 0.0], [-1.0, 0.0]]
-[[block]]
-name = "p"
-material = "rock"
-kind = "rigid"
-vertices = [[0.0, 0.0], [0.5, 0.0], [0.5, 2.0], [0.0, 2.0]]
-[analysis]
+        r#"{}{}[analysis]
 type = "dynamic"
 dt = {dt}
 duration = 2.4
 {integrator}
 ground_motion = {{ expression = "0.5*step(0.25-t)", units = "g" }}
 "#,
-        rock_and_joint(45.0)
+        rock_and_joint(45.0),
+        on_fixed_base(
+            [[-1.0, -0.5], [1.5, -0.5], [1.5, 0.0], [-1.0, 0.0]],
+            "p",
+            "rigid",
+            [[0.0, 0.0], [0.5, 0.0], [0.5, 2.0], [0.0, 2.0]],
+        )
     )
 }
 
